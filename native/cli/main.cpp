@@ -1,0 +1,135 @@
+// cli/main.cpp — `genbrep convert`: files in, report.json and partition.ply out.
+// Thin: parses arguments, reads files, calls pipeline::convert, writes outputs. Bad input
+// exits non-zero with one line naming the file and the problem; it never crashes.
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "pipeline/output.h"
+#include "pipeline/pipeline.h"
+
+namespace fs = std::filesystem;
+using namespace genbrep;
+
+namespace {
+
+const char* kUsage =
+    "usage: genbrep convert --design FILE [--keep-in FILE]... [--keep-out FILE]...\n"
+    "                       [--seed FILE]... [--tolerance D | --grid OX,OY,OZ,H]\n"
+    "                       [--until STAGE] --out DIR\n"
+    "       genbrep --version\n"
+    "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json and DIR/partition.ply.\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+TriangleMesh read_mesh(const std::string& path) {
+  return triangulate(read_polygon_file(path), "'" + path + "'");
+}
+
+double parse_number(const std::string& text, const std::string& flag) {
+  try {
+    size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size()) return value;
+  } catch (const std::exception&) {
+  }
+  throw UsageError(flag + " expects a number, got '" + text + "'");
+}
+
+struct Command {
+  Inputs inputs;
+  Options options;
+  fs::path out;
+};
+
+Command parse(int argc, char** argv) {
+  Command cmd;
+  bool have_design = false, have_tolerance = false, have_grid = false;
+  for (int i = 2; i < argc; ++i) {
+    const std::string flag = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw UsageError(flag + " needs a value");
+      return argv[++i];
+    };
+    if (flag == "--design") {
+      const std::string path = value();
+      cmd.inputs.design = {fs::path(path).stem().string(), read_mesh(path)};
+      have_design = true;
+    } else if (flag == "--keep-in" || flag == "--keep-out" || flag == "--seed") {
+      const std::string path = value();
+      Role role = flag == "--keep-in" ? Role::KeepIn : flag == "--keep-out" ? Role::KeepOut : Role::Seed;
+      cmd.inputs.solids.push_back({fs::path(path).stem().string(), role, read_mesh(path)});
+    } else if (flag == "--tolerance") {
+      cmd.options.incidence.tolerance = parse_number(value(), flag);
+      have_tolerance = true;
+    } else if (flag == "--grid") {
+      std::stringstream parts(value());
+      std::string part;
+      std::vector<double> numbers;
+      while (std::getline(parts, part, ',')) numbers.push_back(parse_number(part, flag));
+      if (numbers.size() != 4) throw UsageError("--grid expects OX,OY,OZ,H");
+      cmd.options.incidence.mode = IncidenceOptions::Mode::Grid;
+      cmd.options.incidence.grid_origin = Vec3(numbers[0], numbers[1], numbers[2]);
+      cmd.options.incidence.grid_h = numbers[3];
+      have_grid = true;
+    } else if (flag == "--until") {
+      cmd.options.until = value();
+    } else if (flag == "--out") {
+      cmd.out = value();
+    } else {
+      throw UsageError("unknown option '" + flag + "'");
+    }
+  }
+  if (!have_design) throw UsageError("--design is required");
+  if (cmd.out.empty()) throw UsageError("--out is required");
+  if (have_tolerance && have_grid) throw UsageError("give --tolerance or --grid, not both");
+  return cmd;
+}
+
+int run_convert(int argc, char** argv) {
+  Command cmd = parse(argc, argv);
+  const Result result = convert(cmd.inputs, cmd.options, Context());
+  std::error_code ec;
+  fs::create_directories(cmd.out, ec);
+  if (ec) throw Error(Code::FileError, "cannot create '" + cmd.out.string() + "': " + ec.message());
+  write_text_file((cmd.out / "report.json").string(), result.report_json);
+  std::cout << "wrote " << (cmd.out / "report.json").string();
+  if (!result.partition.face_solid.empty()) {
+    write_partition_ply((cmd.out / "partition.ply").string(), result.design, result.partition);
+    std::cout << " and " << (cmd.out / "partition.ply").string() << " ("
+              << result.partition.organic_components << " organic components, "
+              << result.partition.loops.size() << " boundary loops)";
+  }
+  std::cout << '\n';
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "";
+  try {
+    if (command == "--version") {
+      std::cout << "genbrep " << kVersion << '\n';
+      return 0;
+    }
+    if (command == "--help" || command == "-h") {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (command == "convert") return run_convert(argc, argv);
+    throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
+  } catch (const UsageError& e) {
+    std::cerr << "genbrep: " << e.what() << '\n' << kUsage;
+    return 2;
+  } catch (const Error& e) {
+    std::cerr << "genbrep: error" << (e.stage().empty() ? "" : " in " + e.stage()) << ": "
+              << e.what() << '\n';
+    return e.code() == Code::Internal ? 3 : 1;
+  } catch (const std::exception& e) {
+    std::cerr << "genbrep: internal error: " << e.what() << '\n';
+    return 3;
+  }
+}

@@ -1,0 +1,49 @@
+#include "pipeline/output.h"
+
+#include <cstdint>
+#include <fstream>
+
+namespace genbrep {
+namespace {
+
+std::ofstream open_for_writing(const std::string& path, std::ios::openmode mode) {
+  std::ofstream out(path, mode);
+  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+  return out;
+}
+
+template <typename T>
+void put(std::ofstream& out, T value) {
+  out.write(reinterpret_cast<const char*>(&value), sizeof(T));  // x86/ARM: little-endian
+}
+
+}  // namespace
+
+void write_text_file(const std::string& path, const std::string& text) {
+  auto out = open_for_writing(path, std::ios::out | std::ios::trunc);
+  out << text << '\n';
+  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+}
+
+void write_partition_ply(const std::string& path, const TriangleMesh& design,
+                         const Partition& partition) {
+  auto out = open_for_writing(path, std::ios::out | std::ios::binary | std::ios::trunc);
+  out << "ply\nformat binary_little_endian 1.0\ncomment genbrep partition\n"
+      << "element vertex " << design.vertices.rows() << "\n"
+      << "property double x\nproperty double y\nproperty double z\n"
+      << "element face " << design.triangles.rows() << "\n"
+      << "property list uchar int vertex_indices\nproperty int solid\nproperty int component\n"
+      << "end_header\n";
+  for (Eigen::Index v = 0; v < design.vertices.rows(); ++v) {
+    for (int k = 0; k < 3; ++k) put<double>(out, design.vertices(v, k));
+  }
+  for (Eigen::Index t = 0; t < design.triangles.rows(); ++t) {
+    put<uint8_t>(out, 3);
+    for (int k = 0; k < 3; ++k) put<int32_t>(out, design.triangles(t, k));
+    put<int32_t>(out, partition.face_solid[t]);
+    put<int32_t>(out, partition.face_component[t]);
+  }
+  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+}
+
+}  // namespace genbrep

@@ -1,0 +1,16 @@
+// pipeline/output.h — files the command line writes into its output folder.
+// partition.ply: the design mesh (binary little-endian PLY, double coordinates) with int
+// face properties `solid` (first incident solid, -1 organic) and `component` (organic
+// component, -1 incident). Throws Error{FileError} when a file cannot be written.
+#pragma once
+#include <string>
+
+#include "pipeline/pipeline.h"
+
+namespace genbrep {
+
+void write_text_file(const std::string& path, const std::string& text);
+void write_partition_ply(const std::string& path, const TriangleMesh& design,
+                         const Partition& partition);
+
+}  // namespace genbrep

@@ -1,0 +1,80 @@
+// pipeline/pipeline.cpp — stage order, timings, error attribution.
+#include "pipeline/pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+
+namespace genbrep {
+
+const char* const kVersion = "0.1.0";
+
+const std::vector<std::string>& stage_names() {
+  static const std::vector<std::string> names{"mesh", "incidence", "partition"};
+  return names;
+}
+
+namespace {
+
+// Runs one stage: times it, records it, and attaches the stage name to its errors.
+template <typename Fn>
+void run_stage(const std::string& stage, Result* result, const Context& context, Fn&& fn) {
+  const auto start = std::chrono::steady_clock::now();
+  context.step(stage, 0.0);
+  try {
+    fn();
+  } catch (const Error& e) {
+    throw e.with_stage(stage);
+  } catch (const std::bad_alloc&) {
+    throw Error(Code::StageFailure, "out of memory", stage);
+  } catch (const std::exception& e) {
+    throw Error(Code::Internal, std::string("unexpected failure: ") + e.what(), stage);
+  }
+  const std::chrono::duration<double> seconds = std::chrono::steady_clock::now() - start;
+  result->timings.push_back({stage, seconds.count()});
+  result->stages_run.push_back(stage);
+}
+
+}  // namespace
+
+Result convert(const Inputs& inputs, const Options& options, const Context& context) {
+  const auto& names = stage_names();
+  const std::string until = options.until.empty() ? names.back() : options.until;
+  const auto last = std::find(names.begin(), names.end(), until);
+  GENBREP_CHECK(last != names.end(), Code::InvalidInput,
+                "unknown stage '" + until + "'; stages are mesh, incidence, partition");
+  auto wanted = [&](const char* stage) {
+    return std::find(names.begin(), last + 1, stage) != last + 1;
+  };
+
+  Result result;
+  std::unique_ptr<SolidSet> solids;
+  run_stage("mesh", &result, context, [&] {
+    result.design = prepare_closed_mesh(inputs.design.mesh, "design '" + inputs.design.name + "'",
+                                        &result.diagnostics);
+    result.design_validation = validate(result.design);
+    for (const auto& solid : inputs.solids) {
+      SolidInput prepared = solid;
+      const std::string what =
+          std::string(solid.role == Role::KeepIn ? "keep-in" : solid.role == Role::KeepOut ? "keep-out" : "seed") +
+          " '" + solid.name + "'";
+      prepared.mesh = prepare_closed_mesh(solid.mesh, what, &result.diagnostics);
+      result.solids.push_back(std::move(prepared));
+    }
+  });
+  if (wanted("incidence")) {
+    run_stage("incidence", &result, context, [&] {
+      solids = std::make_unique<SolidSet>(result.solids, &result.diagnostics);
+      result.incidence = compute_incidence(result.design, *solids, options.incidence, context);
+    });
+  }
+  if (wanted("partition")) {
+    run_stage("partition", &result, context, [&] {
+      const TriMesh mesh = to_trimesh(result.design);
+      result.partition = partition(mesh, result.incidence, solids->size(), options.partition, context);
+    });
+  }
+  result.report_json = make_report(inputs, options, result);
+  return result;
+}
+
+}  // namespace genbrep

@@ -1,0 +1,57 @@
+// pipeline/pipeline.h — the only place that knows the stage order (DESIGN.md).
+// Takes: the design mesh and the input solids as arrays with names and roles, options,
+// and a Context for progress and cancel. Gives: every stage's result, seconds per stage,
+// and report.json text. Runs stages up to and including `options.until`.
+// Throws Error (with the failing stage's name) for bad input or a failed stage.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/context.h"
+#include "core/error.h"
+#include "core/types.h"
+#include "incidence/incidence.h"
+#include "mesh/mesh.h"
+#include "partition/partition.h"
+
+namespace genbrep {
+
+extern const char* const kVersion;
+
+// Stages that exist, in order. `Options::until` takes one of these.
+const std::vector<std::string>& stage_names();
+
+struct Options {
+  IncidenceOptions incidence;
+  PartitionOptions partition;
+  std::string until;  // last stage to run; empty = all
+};
+
+struct Inputs {
+  NamedMesh design;
+  std::vector<SolidInput> solids;
+};
+
+struct StageTiming {
+  std::string stage;
+  double seconds = 0;
+};
+
+struct Result {
+  TriangleMesh design;             // welded, validated, outward-oriented
+  MeshValidation design_validation;
+  std::vector<SolidInput> solids;  // prepared solids, same order as the inputs
+  Incidence incidence;
+  Partition partition;
+  std::vector<std::string> stages_run;
+  std::vector<StageTiming> timings;
+  Diagnostics diagnostics;         // the mesh stage's notes (welds, flips)
+  std::string report_json;
+};
+
+Result convert(const Inputs& inputs, const Options& options, const Context& context);
+
+// report.json of a result (also stored in Result::report_json).
+std::string make_report(const Inputs& inputs, const Options& options, const Result& result);
+
+}  // namespace genbrep

@@ -1,0 +1,89 @@
+// pipeline/report.cpp — report.json: inputs, tolerance, seconds per stage, counts, notes.
+#include <nlohmann/json.hpp>
+
+#include "pipeline/pipeline.h"
+
+namespace genbrep {
+
+std::string make_report(const Inputs& inputs, const Options& options, const Result& result) {
+  using json = nlohmann::ordered_json;
+  json report;
+  report["genbrep_version"] = kVersion;
+  report["stages_run"] = result.stages_run;
+
+  json design;
+  design["name"] = inputs.design.name;
+  design["input_vertices"] = inputs.design.mesh.vertices.rows();
+  design["input_triangles"] = inputs.design.mesh.triangles.rows();
+  design["vertices"] = result.design_validation.vertices;
+  design["triangles"] = result.design_validation.triangles;
+  design["shells"] = result.design_validation.shells;
+  design["volume"] = result.design_validation.signed_volume;
+  json solids = json::array();
+  for (size_t i = 0; i < inputs.solids.size(); ++i) {
+    json s;
+    s["name"] = inputs.solids[i].name;
+    s["role"] = role_name(inputs.solids[i].role);
+    s["triangles"] = inputs.solids[i].mesh.triangles.rows();
+    solids.push_back(s);
+  }
+  report["inputs"] = {{"design", design}, {"solids", solids}};
+
+  const bool grid = options.incidence.mode == IncidenceOptions::Mode::Grid;
+  json tolerance;
+  tolerance["mode"] = grid ? "grid" : "distance";
+  tolerance["value"] = result.incidence.tolerance;
+  tolerance["derived"] = result.incidence.tolerance_derived;
+  if (grid) {
+    const Vec3& o = options.incidence.grid_origin;
+    tolerance["grid_origin"] = {o.x(), o.y(), o.z()};
+    tolerance["grid_h"] = options.incidence.grid_h;
+  }
+  report["tolerance"] = tolerance;
+
+  json seconds = json::object();
+  double total = 0;
+  for (const auto& t : result.timings) {
+    seconds[t.stage] = t.seconds;
+    total += t.seconds;
+  }
+  report["stages"] = seconds;
+  report["seconds_total"] = total;
+
+  const Partition& p = result.partition;
+  json counts;
+  counts["triangles"] = result.design_validation.triangles;
+  const bool partitioned = !p.face_solid.empty();
+  if (partitioned) {
+    json per_solid = json::array();
+    for (const auto& faces : p.solid_faces) per_solid.push_back(faces.size());
+    counts["incident_triangles"] = result.design_validation.triangles - p.organic_triangles();
+    counts["incident_triangles_per_solid"] = per_solid;
+    counts["organic_triangles"] = p.organic_triangles();
+    counts["organic_components"] = p.organic_components;
+    counts["boundary_loops"] = p.loops.size();
+    counts["repaired_vertices"] = p.repaired_vertices;
+    counts["repair_rounds"] = p.repair_rounds;
+    counts["reassigned_triangles"] = p.reassigned_triangles;
+  }
+  if (!result.incidence.incident_vertices_per_solid.empty()) {
+    counts["incident_vertices_per_solid"] = result.incidence.incident_vertices_per_solid;
+  }
+  report["counts"] = counts;
+  if (partitioned) {
+    json loops = json::array();
+    for (const auto& loop : p.loops) {
+      loops.push_back({{"vertices", loop.vertices.size()},
+                       {"solids", loop.solids},
+                       {"component", loop.component}});
+    }
+    report["loops"] = loops;
+  }
+  json diagnostics = result.diagnostics;
+  for (const auto& d : result.incidence.diagnostics) diagnostics.push_back(d);
+  for (const auto& d : p.diagnostics) diagnostics.push_back(d);
+  report["diagnostics"] = diagnostics;
+  return report.dump(2);
+}
+
+}  // namespace genbrep

@@ -1,0 +1,256 @@
+// python/module.cpp — genbrep_native: the pipeline on numpy arrays.
+// Thin: converts arrays and dicts to Inputs/Options, releases the GIL for the native
+// work, converts the Result back. Errors become genbrep_native.ConversionError (with
+// .code and .stage); a progress callback returning False raises CancelledError.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
+
+namespace py = pybind11;
+using namespace genbrep;
+
+namespace {
+
+PyObject* g_conversion_error = nullptr;
+PyObject* g_cancelled_error = nullptr;
+
+void raise_error(const Error& e) {
+  PyObject* type = e.code() == Code::Cancelled ? g_cancelled_error : g_conversion_error;
+  py::object instance = py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", e.what()));
+  if (!instance) throw py::error_already_set();
+  instance.attr("code") = code_name(e.code());
+  instance.attr("stage") = e.stage();
+  PyErr_SetObject(type, instance.ptr());
+}
+
+Vertices to_vertices(const py::handle& obj, const std::string& what) {
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3) {
+    throw Error(Code::InvalidInput, what + ": vertices must be an N×3 float array");
+  }
+  Vertices v(a.shape(0), 3);
+  std::copy(a.data(), a.data() + a.size(), v.data());
+  return v;
+}
+
+Triangles to_triangles(const py::handle& obj, const std::string& what) {
+  auto a = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(obj);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3) {
+    throw Error(Code::InvalidInput, what + ": faces must be an M×3 integer array of triangles");
+  }
+  Triangles t(a.shape(0), 3);
+  for (py::ssize_t i = 0; i < a.size(); ++i) {
+    const int64_t value = a.data()[i];
+    if (value < 0 || value > INT32_MAX) {
+      throw Error(Code::InvalidInput, what + ": face index " + std::to_string(value) + " is out of range");
+    }
+    t.data()[i] = static_cast<int>(value);
+  }
+  return t;
+}
+
+TriangleMesh to_mesh(const py::dict& d, const std::string& what) {
+  if (!d.contains("vertices") || !d.contains("faces")) {
+    throw Error(Code::InvalidInput, what + ": needs 'vertices' and 'faces'");
+  }
+  TriangleMesh mesh;
+  mesh.vertices = to_vertices(d["vertices"], what);
+  mesh.triangles = to_triangles(d["faces"], what);
+  return mesh;
+}
+
+template <typename Matrix>
+py::array matrix_to_array(const Matrix& m) {
+  using Scalar = typename Matrix::Scalar;
+  py::array_t<Scalar> out({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
+  std::copy(m.data(), m.data() + m.size(), out.mutable_data());
+  return std::move(out);
+}
+
+py::array_t<int32_t> vector_to_array(const std::vector<int>& v) {
+  py::array_t<int32_t> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+Options to_options(const py::object& obj) {
+  Options options;
+  if (obj.is_none()) return options;
+  const py::dict d = obj.cast<py::dict>();
+  for (const auto& item : d) {
+    const std::string key = py::str(item.first);
+    const py::handle value = item.second;
+    if (key == "tolerance") {
+      options.incidence.tolerance = value.is_none() ? 0.0 : value.cast<double>();
+    } else if (key == "incidence") {
+      const std::string mode = value.cast<std::string>();
+      if (mode == "grid") options.incidence.mode = IncidenceOptions::Mode::Grid;
+      else if (mode == "distance") options.incidence.mode = IncidenceOptions::Mode::Distance;
+      else throw Error(Code::InvalidInput, "option incidence must be 'distance' or 'grid', got '" + mode + "'");
+    } else if (key == "grid_origin") {
+      const auto o = value.cast<std::vector<double>>();
+      if (o.size() != 3) throw Error(Code::InvalidInput, "option grid_origin needs three numbers");
+      options.incidence.grid_origin = Vec3(o[0], o[1], o[2]);
+    } else if (key == "grid_h") {
+      options.incidence.grid_h = value.cast<double>();
+    } else if (key == "until") {
+      options.until = value.is_none() ? "" : value.cast<std::string>();
+    } else {
+      throw Error(Code::InvalidInput, "unknown option '" + key + "'");
+    }
+  }
+  return options;
+}
+
+py::dict convert_py(const py::dict& design, const py::list& solids, const py::object& options_obj,
+                    const py::object& progress) {
+  Inputs inputs;
+  inputs.design.name = design.contains("name") ? py::str(design["name"]).cast<std::string>() : "design";
+  inputs.design.mesh = to_mesh(design, "design '" + inputs.design.name + "'");
+  for (size_t i = 0; i < solids.size(); ++i) {
+    const py::dict s = solids[i].cast<py::dict>();
+    SolidInput solid;
+    solid.name = s.contains("name") ? py::str(s["name"]).cast<std::string>() : "solid " + std::to_string(i);
+    const std::string role = s.contains("role") ? py::str(s["role"]).cast<std::string>() : "";
+    if (!parse_role(role, &solid.role)) {
+      throw Error(Code::InvalidInput, "solid '" + solid.name + "' has role '" + role +
+                                          "'; roles are keep_in, keep_out, seed");
+    }
+    solid.mesh = to_mesh(s, "solid '" + solid.name + "'");
+    inputs.solids.push_back(std::move(solid));
+  }
+  const Options options = to_options(options_obj);
+
+  // The callback runs on this thread with the GIL re-acquired just for the call. A Python
+  // exception inside it cancels the run and is re-raised afterwards.
+  std::string callback_failure;
+  ProgressCallback callback;
+  if (!progress.is_none()) {
+    callback = [&](const std::string& stage, double fraction) {
+      py::gil_scoped_acquire acquire;
+      try {
+        const py::object r = progress(stage, fraction);
+        return r.is_none() || r.cast<bool>();
+      } catch (py::error_already_set& e) {
+        callback_failure = e.what();
+        return false;
+      }
+    };
+  }
+  Result result;
+  try {
+    py::gil_scoped_release release;
+    result = convert(inputs, options, Context(callback));
+  } catch (const Error& e) {
+    if (callback_failure.empty()) throw;
+    throw Error(Code::InvalidInput, "the progress callback raised: " + callback_failure, e.stage());
+  }
+  py::dict out;
+  out["report"] = py::module_::import("json").attr("loads")(result.report_json);
+  py::dict d;
+  d["vertices"] = matrix_to_array(result.design.vertices);
+  d["faces"] = matrix_to_array(result.design.triangles);
+  d["face_source"] = vector_to_array(result.design.triangle_source);
+  out["design"] = d;
+  if (!result.partition.face_solid.empty()) {
+    py::dict p;
+    p["face_solid"] = vector_to_array(result.partition.face_solid);
+    p["face_component"] = vector_to_array(result.partition.face_component);
+    p["organic_components"] = result.partition.organic_components;
+    py::list loops;
+    for (const auto& loop : result.partition.loops) {
+      py::dict l;
+      l["vertices"] = vector_to_array(loop.vertices);
+      l["solids"] = loop.solids;
+      l["component"] = loop.component;
+      loops.append(l);
+    }
+    p["loops"] = loops;
+    out["partition"] = p;
+  } else {
+    out["partition"] = py::none();
+  }
+  out["cages"] = py::list();
+  out["composed"] = py::none();
+  return out;
+}
+
+// Wraps a call so genbrep::Error surfaces as ConversionError with code and stage.
+template <typename Fn>
+auto guarded(Fn&& fn) {
+  try {
+    return fn();
+  } catch (const Error& e) {
+    raise_error(e);
+    throw py::error_already_set();
+  }
+}
+
+}  // namespace
+
+PYBIND11_MODULE(genbrep_native, m) {
+  m.doc() = "genbrep native core: generative design to editable cages and a watertight solid";
+  m.attr("__version__") = kVersion;
+  g_conversion_error = PyErr_NewExceptionWithDoc(
+      "genbrep_native.ConversionError",
+      "A conversion failed: bad input or a stage that could not recover. Attributes: code, stage.",
+      PyExc_RuntimeError, nullptr);
+  g_cancelled_error = PyErr_NewExceptionWithDoc("genbrep_native.CancelledError",
+                                                "The progress callback cancelled the conversion.",
+                                                g_conversion_error, nullptr);
+  m.attr("ConversionError") = py::handle(g_conversion_error);
+  m.attr("CancelledError") = py::handle(g_cancelled_error);
+  m.attr("STAGES") = py::tuple(py::cast(stage_names()));
+
+  m.def(
+      "convert",
+      [](const py::dict& design, const py::list& solids, const py::object& options,
+         const py::object& progress) {
+        return guarded([&] { return convert_py(design, solids, options, progress); });
+      },
+      py::arg("design"), py::arg("solids") = py::list(), py::arg("options") = py::none(),
+      py::arg("progress") = py::none(),
+      "convert(design, solids=[], options=None, progress=None) -> dict\n\n"
+      "design: dict(name, vertices float64 N×3, faces int M×3); solids: list of dict(name,\n"
+      "role in keep_in/keep_out/seed, vertices, faces); options: dict(tolerance, incidence,\n"
+      "grid_origin, grid_h, until); progress(stage, fraction) -> bool, False cancels.");
+
+  m.def(
+      "read_mesh",
+      [](const std::string& path) {
+        return guarded([&] {
+          const TriangleMesh mesh = triangulate(read_polygon_file(path), "'" + path + "'");
+          return py::make_tuple(matrix_to_array(mesh.vertices), matrix_to_array(mesh.triangles));
+        });
+      },
+      py::arg("path"), "read_mesh(path) -> (vertices N×3 float64, faces M×3 int32); OBJ/PLY/STL/OFF");
+
+  m.def(
+      "validate_mesh",
+      [](const py::object& vertices, const py::object& faces) {
+        return guarded([&] {
+          TriangleMesh mesh;
+          mesh.vertices = to_vertices(vertices, "mesh");
+          mesh.triangles = to_triangles(faces, "mesh");
+          const MeshValidation v = validate(mesh);
+          py::dict d;
+          d["vertices"] = v.vertices;
+          d["triangles"] = v.triangles;
+          d["non_finite_vertices"] = v.non_finite_vertices;
+          d["repeated_index_triangles"] = v.repeated_index_triangles;
+          d["zero_area_triangles"] = v.zero_area_triangles;
+          d["boundary_edges"] = v.boundary_edges;
+          d["non_manifold_edges"] = v.non_manifold_edges;
+          d["non_manifold_vertices"] = v.non_manifold_vertices;
+          d["inconsistent_edges"] = v.inconsistent_edges;
+          d["shells"] = v.shells;
+          d["signed_volume"] = v.signed_volume;
+          d["closed_manifold"] = v.closed_manifold();
+          return d;
+        });
+      },
+      py::arg("vertices"), py::arg("faces"), "validate_mesh(vertices, faces) -> dict of counts");
+}

@@ -1,0 +1,182 @@
+// Tests for mesh/: file reading, triangulation, welding, validation and preparation.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "level_set.h"
+#include "mesh/mesh.h"
+
+using namespace genbrep;
+using genbrep::testing::box_mesh;
+using genbrep::testing::merge;
+
+namespace {
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("genbrep_test_" + name);
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+const char* kCubeObj =
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+    "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+
+}  // namespace
+
+TEST(MeshIo, ReadsObjQuadsAndTriangulatesThem) {
+  const TriangleMesh m = triangulate(read_polygon_file(write_temp("cube.obj", kCubeObj)), "cube");
+  EXPECT_EQ(m.vertices.rows(), 8);
+  EXPECT_EQ(m.triangles.rows(), 12);
+  EXPECT_EQ(m.triangle_source[0], 0);
+  EXPECT_EQ(m.triangle_source[11], 5);
+  const MeshValidation v = validate(m);
+  EXPECT_TRUE(v.closed_manifold()) << v.problems();
+  EXPECT_NEAR(v.signed_volume, 1.0, 1e-12);
+}
+
+TEST(MeshIo, ReadsOffAndAsciiStlAndPly) {
+  const std::string off = write_temp("tet.off",
+                                     "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                     "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  EXPECT_TRUE(validate(triangulate(read_polygon_file(off), "tet")).closed_manifold());
+  std::string stl = "solid t\n";
+  const double p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const int f[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  for (const auto& t : f) {
+    stl += "facet normal 0 0 0\nouter loop\n";
+    for (int c : t) {
+      stl += "vertex " + std::to_string(p[c][0]) + " " + std::to_string(p[c][1]) + " " +
+             std::to_string(p[c][2]) + "\n";
+    }
+    stl += "endloop\nendfacet\n";
+  }
+  stl += "endsolid t\n";
+  const TriangleMesh from_stl = weld(triangulate(read_polygon_file(write_temp("tet.stl", stl)), "tet"));
+  EXPECT_EQ(from_stl.vertices.rows(), 4);
+  EXPECT_TRUE(validate(from_stl).closed_manifold());
+  const std::string ply = write_temp("tet.ply",
+                                     "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                                     "property float y\nproperty float z\nelement face 4\n"
+                                     "property list uchar int vertex_indices\nend_header\n"
+                                     "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n");
+  EXPECT_EQ(triangulate(read_polygon_file(ply), "tet").triangles.rows(), 4);
+}
+
+TEST(MeshIo, MissingAndUnreadableFilesThrowFileError) {
+  try {
+    read_polygon_file("/nonexistent/genbrep/design.obj");
+    FAIL() << "no error for a missing file";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), Code::FileError);
+    EXPECT_NE(std::string(e.what()).find("design.obj"), std::string::npos);
+  }
+  EXPECT_THROW(read_polygon_file(write_temp("junk.xyz", "not a mesh")), Error);
+}
+
+TEST(MeshIo, KeepsNonManifoldFacesAsTheFileStatesThem) {
+  // Three triangles on one edge: OpenMesh's own mesh would split the third off.
+  const std::string obj = write_temp("fin.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\n"
+                                     "f 1 2 3\nf 2 1 4\nf 1 2 5\n");
+  const TriangleMesh m = triangulate(read_polygon_file(obj), "fin");
+  EXPECT_EQ(m.vertices.rows(), 5);
+  EXPECT_EQ(validate(m).non_manifold_edges, 1);
+}
+
+TEST(MeshTriangulate, RejectsOutOfRangeIndices) {
+  PolygonSoup soup;
+  soup.vertices = Vertices::Zero(3, 3);
+  soup.indices = {0, 1, 7};
+  soup.offsets = {0, 3};
+  EXPECT_THROW(triangulate(soup, "bad"), Error);
+}
+
+TEST(MeshWeld, MergesExactDuplicatesAndKeepsOrder) {
+  TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  // Unshare every corner: 36 vertices, as an STL file would hold them.
+  TriangleMesh soup;
+  soup.vertices.resize(3 * box.triangles.rows(), 3);
+  soup.triangles.resize(box.triangles.rows(), 3);
+  for (Eigen::Index t = 0; t < box.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      soup.vertices.row(3 * t + c) = box.vertices.row(box.triangles(t, c));
+      soup.triangles(t, c) = static_cast<int>(3 * t + c);
+    }
+  EXPECT_EQ(validate(soup).boundary_edges, 36);
+  const TriangleMesh welded = weld(soup);
+  EXPECT_EQ(welded.vertices.rows(), 8);
+  EXPECT_TRUE(validate(welded).closed_manifold());
+  EXPECT_EQ(welded.vertices.row(0), soup.vertices.row(0));
+}
+
+TEST(MeshValidate, CountsEachProblem) {
+  const TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  EXPECT_TRUE(validate(box).closed_manifold());
+  EXPECT_EQ(validate(box).shells, 1);
+
+  TriangleMesh open = box;
+  open.triangles.conservativeResize(11, 3);
+  EXPECT_EQ(validate(open).boundary_edges, 3);
+
+  TriangleMesh flipped = box;
+  std::swap(flipped.triangles(0, 1), flipped.triangles(0, 2));
+  EXPECT_EQ(validate(flipped).inconsistent_edges, 3);
+
+  TriangleMesh two = merge({box, box_mesh(Vec3(2, 0, 0), Vec3(3, 1, 1))});
+  EXPECT_EQ(validate(two).shells, 2);
+  EXPECT_TRUE(validate(two).closed_manifold());
+
+  // Two boxes sharing only the corner (1,1,1): one non-manifold vertex once welded.
+  TriangleMesh pinched = weld(merge({box, box_mesh(Vec3(1, 1, 1), Vec3(2, 2, 2))}));
+  EXPECT_EQ(validate(pinched).non_manifold_vertices, 1);
+  EXPECT_EQ(validate(pinched).non_manifold_edges, 0);
+
+  TriangleMesh nan = box;
+  nan.vertices(3, 1) = std::nan("");
+  EXPECT_EQ(validate(nan).non_finite_vertices, 1);
+
+  TriangleMesh repeated = box;
+  repeated.triangles(0, 2) = repeated.triangles(0, 0);
+  EXPECT_EQ(validate(repeated).repeated_index_triangles, 1);
+}
+
+TEST(MeshPrepare, ErrorsNameTheObjectAndTheProblem) {
+  const TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  auto message = [](const TriangleMesh& m) {
+    try {
+      prepare_closed_mesh(m, "keep-in 'boss'", nullptr);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), Code::InvalidInput);
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  TriangleMesh open = box;
+  open.triangles.conservativeResize(10, 3);
+  EXPECT_EQ(message(open), "keep-in 'boss' is open: 4 boundary edges (the surface is open)");
+  EXPECT_EQ(message(TriangleMesh{}), "keep-in 'boss' is empty: it has no triangles");
+  TriangleMesh nan = box;
+  nan.vertices(2, 0) = std::nan("");
+  EXPECT_NE(message(nan).find("1 vertices with NaN"), std::string::npos);
+}
+
+TEST(MeshPrepare, FlipsAnInsideOutSurfaceAndSaysSo) {
+  TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(2, 1, 1));
+  for (Eigen::Index t = 0; t < box.triangles.rows(); ++t) std::swap(box.triangles(t, 1), box.triangles(t, 2));
+  Diagnostics notes;
+  const TriangleMesh fixed = prepare_closed_mesh(box, "seed 's'", &notes);
+  EXPECT_NEAR(validate(fixed).signed_volume, 2.0, 1e-12);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("inside out"), std::string::npos);
+}
+
+TEST(MeshHalfedge, ConvertsWithSameIndices) {
+  const TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), 3);
+  const TriMesh mesh = to_trimesh(box);
+  EXPECT_EQ(mesh.n_faces(), static_cast<size_t>(box.triangles.rows()));
+  EXPECT_EQ(mesh.n_vertices(), static_cast<size_t>(box.vertices.rows()));
+  // Euler characteristic of a sphere-like closed surface.
+  EXPECT_EQ(static_cast<int>(mesh.n_vertices() - mesh.n_edges() + mesh.n_faces()), 2);
+}

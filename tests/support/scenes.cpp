@@ -1,0 +1,128 @@
+#include "scenes.h"
+
+#include <algorithm>
+
+#include "level_set.h"
+
+namespace genbrep::testing {
+namespace {
+
+// Grid covering [lo, hi] with spacing h, origin offset so no solid face sits on a grid
+// plane by accident (a solver's grid knows nothing of the solids).
+Scene extract(const std::string& name, const Field& f, const Vec3& lo, const Vec3& hi, double h) {
+  Scene s;
+  s.name = name;
+  s.h = h;
+  s.grid_origin = lo - Vec3(0.37 * h, 0.29 * h, 0.41 * h);
+  const Vec3 size = (hi - s.grid_origin) / h;
+  const Eigen::Vector3i cells(static_cast<int>(std::ceil(size.x())) + 1,
+                              static_cast<int>(std::ceil(size.y())) + 1,
+                              static_cast<int>(std::ceil(size.z())) + 1);
+  s.design = extract_level_set(f, s.grid_origin, h, cells);
+  return s;
+}
+
+SolidInput solid(const std::string& name, Role role, TriangleMesh mesh) {
+  return SolidInput{name, role, std::move(mesh)};
+}
+
+}  // namespace
+
+Scene grown_box_scene(double h) {
+  const Vec3 lo(-1, -1, -1), hi(1, 1, 0);
+  const Vec3 center(0, 0, 0.3);
+  auto f = [&](const Vec3& p) { return std::min(box_sdf(p, lo, hi), sphere_sdf(p, center, 0.6)); };
+  Scene s = extract("grown_box", f, Vec3(-1.3, -1.3, -1.3), Vec3(1.3, 1.3, 1.2), h);
+  s.solids.push_back(solid("base", Role::KeepIn, box_mesh(lo, hi)));
+  s.expected_components = 1;
+  s.expected_loops = 1;
+  return s;
+}
+
+Scene tube_scene(double h) {
+  const Vec3 lo0(-2, -0.5, -0.5), hi0(-1, 0.5, 0.5), lo1(1, -0.5, -0.5), hi1(2, 0.5, 0.5);
+  auto f = [&](const Vec3& p) {
+    return std::min({box_sdf(p, lo0, hi0), box_sdf(p, lo1, hi1),
+                     capsule_sdf(p, Vec3(-1.3, 0, 0), Vec3(1.3, 0, 0), 0.25)});
+  };
+  Scene s = extract("tube", f, Vec3(-2.3, -0.8, -0.8), Vec3(2.3, 0.8, 0.8), h);
+  s.solids.push_back(solid("left", Role::KeepIn, box_mesh(lo0, hi0)));
+  s.solids.push_back(solid("right", Role::KeepIn, box_mesh(lo1, hi1)));
+  s.expected_components = 1;
+  s.expected_loops = 2;
+  return s;
+}
+
+Scene arch_row_scene(double h, int n) {
+  const double spacing = 4.0;  // feet 4 apart, arch radius 2
+  std::vector<std::pair<Vec3, Vec3>> boxes;
+  for (int i = 0; i <= n; ++i) {
+    const double x = i * spacing;
+    boxes.push_back({Vec3(x - 0.6, -0.6, -1.0), Vec3(x + 0.6, 0.6, 0.3)});
+  }
+  auto f = [boxes, n, spacing](const Vec3& p) {
+    double d = 1e9;
+    for (const auto& b : boxes) d = std::min(d, box_sdf(p, b.first, b.second));
+    for (int i = 0; i < n; ++i) d = std::min(d, arch_sdf(p, Vec3((i + 0.5) * spacing, 0, 0), 2.0, 0.35));
+    return d;
+  };
+  Scene s = extract("arch_row", f, Vec3(-0.9, -0.9, -1.3), Vec3(n * spacing + 0.9, 0.9, 2.7), h);
+  for (int i = 0; i <= n; ++i) {
+    s.solids.push_back(solid("foot" + std::to_string(i), Role::KeepIn, box_mesh(boxes[i].first, boxes[i].second)));
+  }
+  s.expected_components = n;
+  s.expected_loops = 2 * n;
+  return s;
+}
+
+Scene two_arches_scene(double h) {
+  std::vector<std::pair<Vec3, Vec3>> boxes;
+  for (double y : {-1.5, 1.5})
+    for (double x : {-2.0, 2.0}) boxes.push_back({Vec3(x - 0.6, y - 0.6, -1.0), Vec3(x + 0.6, y + 0.6, 0.3)});
+  auto f = [&](const Vec3& p) {
+    double d = 1e9;
+    for (const auto& b : boxes) d = std::min(d, box_sdf(p, b.first, b.second));
+    for (double y : {-1.5, 1.5}) d = std::min(d, arch_sdf(p, Vec3(0, y, 0), 2.0, 0.35));
+    return d;
+  };
+  Scene s = extract("two_arches", f, Vec3(-2.9, -2.4, -1.3), Vec3(2.9, 2.4, 2.7), h);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    s.solids.push_back(solid("foot" + std::to_string(i), Role::KeepIn, box_mesh(boxes[i].first, boxes[i].second)));
+  }
+  s.expected_components = 2;
+  s.expected_loops = 4;
+  return s;
+}
+
+Scene eroded_seed_scene(double h) {
+  const Vec3 lo(-1, -1, -1), hi(1, 1, 1);
+  auto f = [&](const Vec3& p) { return std::max(box_sdf(p, lo, hi), -sphere_sdf(p, hi, 0.9)); };
+  Scene s = extract("eroded_seed", f, Vec3(-1.3, -1.3, -1.3), Vec3(1.3, 1.3, 1.3), h);
+  s.solids.push_back(solid("stock", Role::Seed, box_mesh(lo, hi)));
+  s.expected_components = 1;
+  s.expected_loops = 1;
+  return s;
+}
+
+Scene bolt_hole_scene(double h) {
+  const Vec3 lo(-1, -1, -0.5), hi(1, 1, 0.5);
+  const Vec3 axis_base(0, 0, -1.0);
+  const double radius = 0.35;
+  auto hole = [&](const Vec3& p) {  // infinite-enough cylinder along z, inside [-1, 1.5]
+    const double radial = std::hypot(p.x(), p.y()) - radius;
+    const double axial = std::max(axis_base.z() - p.z(), p.z() - 1.5);
+    return std::max(radial, axial);
+  };
+  auto f = [&](const Vec3& p) {
+    const double material = std::min(box_sdf(p, lo, hi), capsule_sdf(p, Vec3(0.9, 0, 0), Vec3(2.2, 0, 0), 0.3));
+    return std::max(material, -hole(p));
+  };
+  Scene s = extract("bolt_hole", f, Vec3(-1.3, -1.3, -0.8), Vec3(2.6, 1.3, 0.8), h);
+  s.solids.push_back(solid("boss", Role::KeepIn, box_mesh(lo, hi)));
+  s.solids.push_back(solid("bolt", Role::KeepOut, cylinder_mesh(axis_base, radius, 2.5, 48)));
+  s.expected_components = 1;
+  s.expected_loops = 1;
+  return s;
+}
+
+}  // namespace genbrep::testing

@@ -1,0 +1,35 @@
+// tests/support/scenes.h — level-set designs with exact input solids whose partition is
+// known in advance. Each design is extracted on a grid of spacing h from origin
+// `grid_origin`, as a level-set solver would output it.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+
+namespace genbrep::testing {
+
+struct Scene {
+  std::string name;
+  TriangleMesh design;
+  std::vector<SolidInput> solids;
+  Vec3 grid_origin;
+  double h = 0;
+  int expected_components = 0;
+  int expected_loops = 0;
+};
+
+// Organic blob grown on the top face of one keep-in box: 1 component, 1 loop.
+Scene grown_box_scene(double h);
+// A tube joining two keep-in boxes: 1 component, 2 loops.
+Scene tube_scene(double h);
+// Two disjoint arches, each joining two keep-in boxes: 2 components, 4 loops.
+Scene two_arches_scene(double h);
+// A seed box with a spherical bite eroded from one corner: 1 component, 1 loop.
+Scene eroded_seed_scene(double h);
+// A keep-in boss with organic material and a keep-out bolt hole through both.
+Scene bolt_hole_scene(double h);
+// A row of n arches joining n + 1 keep-in boxes at their feet (size scales with n).
+Scene arch_row_scene(double h, int n);
+
+}  // namespace genbrep::testing
