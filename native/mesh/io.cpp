@@ -2,6 +2,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+#include <algorithm>
 #include <fstream>
 #include <unordered_map>
 
@@ -83,6 +84,16 @@ PolygonSoup read_polygon_file(const std::string& path) {
   if (!ok) {
     throw Error(Code::FileError,
                 "cannot read '" + path + "': not a readable OBJ, PLY, STL or OFF file", "mesh");
+  }
+  // A reader skips a vertex line it cannot parse ("nan", "inf", garbage); the faces that
+  // use it then point nowhere. Say so rather than reporting a bad index later.
+  const auto unreadable = std::count(soup.indices.begin(), soup.indices.end(), -1);
+  if (unreadable > 0) {
+    throw Error(Code::InvalidInput,
+                "'" + path + "' has vertex coordinates that cannot be read as numbers (NaN, " +
+                    "infinite or malformed): " + std::to_string(unreadable) +
+                    " face corners use such vertices",
+                "mesh");
   }
   soup.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
   for (size_t i = 0; i < points.size(); ++i) soup.vertices.row(i) = points[i];

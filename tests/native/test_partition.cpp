@@ -70,7 +70,8 @@ TEST_P(PartitionScenes, ComponentsAndLoopsAreAsBuilt) {
                   : which == 1 ? tube_scene(h)
                   : which == 2 ? two_arches_scene(h)
                   : which == 3 ? eroded_seed_scene(h)
-                               : bolt_hole_scene(h);
+                  : which == 4 ? bolt_hole_scene(h)
+                               : arch_row_scene(h, 3);
   const Converted r = run(s, grid);
   EXPECT_EQ(r.partition.organic_components, s.expected_components) << s.name;
   EXPECT_EQ(static_cast<int>(r.partition.loops.size()), s.expected_loops) << s.name;
@@ -83,7 +84,7 @@ TEST_P(PartitionScenes, ComponentsAndLoopsAreAsBuilt) {
 }
 
 INSTANTIATE_TEST_SUITE_P(DistanceAndGrid, PartitionScenes,
-                         ::testing::Combine(::testing::Range(0, 5), ::testing::Bool()));
+                         ::testing::Combine(::testing::Range(0, 6), ::testing::Bool()));
 
 TEST(Partition, TubeLoopsEachBorderOneKeepIn) {
   const Converted r = run(tube_scene(0.05), false);

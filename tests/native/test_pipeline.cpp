@@ -1,1 +1,178 @@
+// Tests for pipeline/ and the command line: stage order, report, outputs, errors.
 #include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "level_set.h"
+#include "pipeline/pipeline.h"
+#include "scenes.h"
+
+using namespace genbrep;
+using namespace genbrep::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+Inputs inputs_of(const Scene& s) {
+  Inputs in;
+  in.design = {s.name, s.design};
+  in.solids = s.solids;
+  return in;
+}
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("genbrep_cli_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct CliRun {
+  int exit_code;
+  std::string err;
+};
+
+CliRun run_cli(const std::string& args, const fs::path& dir) {
+  const fs::path err = dir / "stderr.txt";
+  const std::string command = std::string(GENBREP_CLI) + " " + args + " > " + (dir / "stdout.txt").string() +
+                              " 2> " + err.string();
+  const int status = std::system(command.c_str());
+  std::stringstream text;
+  text << std::ifstream(err).rdbuf();
+  return {WEXITSTATUS(status), text.str()};
+}
+
+// Writes the scene's design and solids as OBJ files; returns the CLI's input flags.
+std::string write_scene(const Scene& s, const fs::path& dir) {
+  std::string flags = "--design " + (dir / (s.name + ".obj")).string();
+  write_obj((dir / (s.name + ".obj")).string(), s.design);
+  for (const auto& solid : s.solids) {
+    const fs::path path = dir / (solid.name + ".obj");
+    write_obj(path.string(), solid.mesh);
+    flags += std::string(solid.role == Role::KeepIn ? " --keep-in " : solid.role == Role::KeepOut ? " --keep-out " : " --seed ") + path.string();
+  }
+  return flags;
+}
+
+}  // namespace
+
+TEST(Pipeline, TwoArchesGiveTwoComponentsAndFourLoops) {
+  const Scene s = two_arches_scene(0.05);
+  const Result r = convert(inputs_of(s), Options{}, Context());
+  const auto report = nlohmann::json::parse(r.report_json);
+  EXPECT_EQ(report["counts"]["organic_components"], 2);
+  EXPECT_EQ(report["counts"]["boundary_loops"], 4);
+  EXPECT_EQ(report["stages_run"], (std::vector<std::string>{"mesh", "incidence", "partition"}));
+  EXPECT_TRUE(report["tolerance"]["derived"].get<bool>());
+  EXPECT_EQ(report["counts"]["incident_triangles_per_solid"].size(), 4u);
+  for (const auto& n : report["counts"]["incident_triangles_per_solid"]) EXPECT_GT(n.get<int>(), 100);
+  EXPECT_EQ(report["counts"]["organic_triangles"].get<int>() + report["counts"]["incident_triangles"].get<int>(),
+            report["counts"]["triangles"].get<int>());
+  for (const char* stage : {"mesh", "incidence", "partition"}) EXPECT_TRUE(report["stages"].contains(stage));
+}
+
+TEST(Pipeline, SameInputGivesSameOutput) {
+  const Scene s = bolt_hole_scene(0.06);
+  const Result a = convert(inputs_of(s), Options{}, Context());
+  const Result b = convert(inputs_of(s), Options{}, Context());
+  EXPECT_EQ(a.partition.face_solid, b.partition.face_solid);
+  EXPECT_EQ(a.partition.face_component, b.partition.face_component);
+  ASSERT_EQ(a.partition.loops.size(), b.partition.loops.size());
+  for (size_t i = 0; i < a.partition.loops.size(); ++i) EXPECT_EQ(a.partition.loops[i].vertices, b.partition.loops[i].vertices);
+}
+
+TEST(Pipeline, UntilStopsAfterTheNamedStageAndRejectsUnknownStages) {
+  const Scene s = grown_box_scene(0.1);
+  Options options;
+  options.until = "incidence";
+  const Result r = convert(inputs_of(s), options, Context());
+  EXPECT_EQ(r.stages_run, (std::vector<std::string>{"mesh", "incidence"}));
+  EXPECT_TRUE(r.partition.face_solid.empty());
+  options.until = "teleport";
+  EXPECT_THROW(convert(inputs_of(s), options, Context()), Error);
+}
+
+TEST(Pipeline, ErrorsCarryTheStageName) {
+  Scene s = grown_box_scene(0.1);
+  s.solids[0].mesh.triangles.conservativeResize(11, 3);
+  try {
+    convert(inputs_of(s), Options{}, Context());
+    FAIL() << "open keep-in accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.stage(), "mesh");
+    EXPECT_EQ(std::string(e.what()), "keep-in 'base' is open: 3 boundary edges (the surface is open)");
+  }
+}
+
+TEST(Cli, ConvertsTwoArchesAndWritesReportAndPartition) {
+  const fs::path dir = temp_dir("arches");
+  const Scene s = two_arches_scene(0.06);
+  const CliRun run = run_cli("convert " + write_scene(s, dir) + " --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::ifstream report_file(dir / "out" / "report.json");
+  const auto report = nlohmann::json::parse(report_file);
+  EXPECT_EQ(report["counts"]["organic_components"], 2);
+  EXPECT_EQ(report["counts"]["boundary_loops"], 4);
+  EXPECT_EQ(report["inputs"]["solids"].size(), 4u);
+  // partition.ply: header plus binary body of the announced size.
+  std::ifstream ply(dir / "out" / "partition.ply", std::ios::binary);
+  std::string line, header;
+  int vertices = 0, faces = 0;
+  while (std::getline(ply, line) && line != "end_header") {
+    std::sscanf(line.c_str(), "element vertex %d", &vertices);
+    std::sscanf(line.c_str(), "element face %d", &faces);
+  }
+  EXPECT_EQ(faces, report["counts"]["triangles"].get<int>());
+  const auto body = fs::file_size(dir / "out" / "partition.ply") - static_cast<size_t>(ply.tellg());
+  EXPECT_EQ(body, static_cast<size_t>(vertices) * 24 + static_cast<size_t>(faces) * (1 + 12 + 8));
+}
+
+TEST(Cli, GridModeFromTheCommandLine) {
+  const fs::path dir = temp_dir("grid");
+  const Scene s = tube_scene(0.06);
+  std::ostringstream grid;
+  grid.precision(17);
+  grid << s.grid_origin.x() << "," << s.grid_origin.y() << "," << s.grid_origin.z() << "," << s.h;
+  const CliRun run = run_cli("convert " + write_scene(s, dir) + " --grid " + grid.str() + " --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::ifstream report_file(dir / "out" / "report.json");
+  const auto report = nlohmann::json::parse(report_file);
+  EXPECT_EQ(report["tolerance"]["mode"], "grid");
+  EXPECT_EQ(report["counts"]["boundary_loops"], 2);
+}
+
+TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
+  const fs::path dir = temp_dir("bad");
+  const Scene s = grown_box_scene(0.1);
+  write_obj((dir / "design.obj").string(), s.design);
+  TriangleMesh open = s.solids[0].mesh;
+  open.triangles.conservativeResize(10, 3);
+  write_obj((dir / "boss.obj").string(), open);
+  std::ofstream(dir / "empty.obj") << "# nothing\n";
+  std::ofstream(dir / "nan.obj") << "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
+  const std::string design = " --design " + (dir / "design.obj").string();
+  const std::string out = " --out " + (dir / "out").string();
+  const struct {
+    std::string args;
+    std::string expected;
+  } cases[] = {
+      {"convert --design " + (dir / "missing.obj").string() + out, "missing.obj': no such file"},
+      {"convert --design " + (dir / "empty.obj").string() + out, "design 'empty' is empty"},
+      {"convert --design " + (dir / "nan.obj").string() + out, "nan.obj' has vertex coordinates that cannot be read"},
+      {"convert" + design + " --keep-in " + (dir / "boss.obj").string() + out,
+       "keep-in 'boss' is open: 4 boundary edges"},
+      {"convert" + design + " --tolerance -1" + out, "tolerance must be positive"},
+      {"convert" + design, "--out is required"},
+  };
+  for (const auto& c : cases) {
+    const CliRun run = run_cli(c.args, dir);
+    EXPECT_NE(run.exit_code, 0) << c.args;
+    EXPECT_NE(run.exit_code, 3) << "internal error for " << c.args << ": " << run.err;
+    EXPECT_NE(run.err.find(c.expected), std::string::npos) << run.err;
+    EXPECT_EQ(run.err.rfind("genbrep: ", 0), 0u) << run.err;
+  }
+}

@@ -191,3 +191,21 @@ TriangleMesh merge(const std::vector<TriangleMesh>& meshes) {
 }
 
 }  // namespace genbrep::testing
+
+#include <cstdio>
+
+namespace genbrep::testing {
+
+void write_obj(const std::string& path, const TriangleMesh& mesh) {
+  FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) return;
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
+    std::fprintf(file, "v %.17g %.17g %.17g\n", mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2));
+  }
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
+    std::fprintf(file, "f %d %d %d\n", mesh.triangles(t, 0) + 1, mesh.triangles(t, 1) + 1, mesh.triangles(t, 2) + 1);
+  }
+  std::fclose(file);
+}
+
+}  // namespace genbrep::testing

@@ -34,3 +34,8 @@ TriangleMesh cylinder_mesh(const Vec3& base, double radius, double height, int s
 TriangleMesh merge(const std::vector<TriangleMesh>& meshes);
 
 }  // namespace genbrep::testing
+
+namespace genbrep::testing {
+// Writes an OBJ file (for command-line tests and fixtures).
+void write_obj(const std::string& path, const TriangleMesh& mesh);
+}  // namespace genbrep::testing

@@ -54,19 +54,21 @@ Scene tube_scene(double h) {
 }
 
 Scene arch_row_scene(double h, int n) {
-  const double spacing = 4.0;  // feet 4 apart, arch radius 2
+  // Feet 4 apart and 2 wide; arches of radius 1.45 land 1.1 apart on a shared foot, so
+  // neighbouring arches stay separate organic components.
+  const double spacing = 4.0, radius = 1.45;
   std::vector<std::pair<Vec3, Vec3>> boxes;
   for (int i = 0; i <= n; ++i) {
     const double x = i * spacing;
-    boxes.push_back({Vec3(x - 0.6, -0.6, -1.0), Vec3(x + 0.6, 0.6, 0.3)});
+    boxes.push_back({Vec3(x - 1.0, -0.6, -1.0), Vec3(x + 1.0, 0.6, 0.3)});
   }
-  auto f = [boxes, n, spacing](const Vec3& p) {
+  auto f = [boxes, n, spacing, radius](const Vec3& p) {
     double d = 1e9;
     for (const auto& b : boxes) d = std::min(d, box_sdf(p, b.first, b.second));
-    for (int i = 0; i < n; ++i) d = std::min(d, arch_sdf(p, Vec3((i + 0.5) * spacing, 0, 0), 2.0, 0.35));
+    for (int i = 0; i < n; ++i) d = std::min(d, arch_sdf(p, Vec3((i + 0.5) * spacing, 0, 0), radius, 0.35));
     return d;
   };
-  Scene s = extract("arch_row", f, Vec3(-0.9, -0.9, -1.3), Vec3(n * spacing + 0.9, 0.9, 2.7), h);
+  Scene s = extract("arch_row", f, Vec3(-1.3, -0.9, -1.3), Vec3(n * spacing + 1.3, 0.9, 2.2), h);
   for (int i = 0; i <= n; ++i) {
     s.solids.push_back(solid("foot" + std::to_string(i), Role::KeepIn, box_mesh(boxes[i].first, boxes[i].second)));
   }

@@ -1,0 +1,123 @@
+"""The compiled module on numpy arrays: results, errors, progress and cancel."""
+import threading
+
+import numpy as np
+import pytest
+
+from conftest import load_scene
+
+SCENES = ["grown_box", "tube", "two_arches", "eroded_seed", "bolt_hole"]
+
+
+def test_module_describes_itself(native):
+    assert native.__version__.count(".") == 2
+    assert native.STAGES[:3] == ("mesh", "incidence", "partition")
+    assert issubclass(native.CancelledError, native.ConversionError)
+
+
+@pytest.mark.parametrize("scene", SCENES)
+@pytest.mark.parametrize("mode", ["distance", "grid"])
+def test_partition_of_each_scene(native, scenes, scene, mode):
+    design, solids, (origin, h), (components, loops) = load_scene(native, scenes / scene)
+    options = {"tolerance": h} if mode == "distance" else {"incidence": "grid", "grid_origin": origin, "grid_h": h}
+    result = native.convert(design, solids, options)
+    part = result["partition"]
+    faces = result["design"]["faces"]
+    assert part["organic_components"] == components
+    assert len(part["loops"]) == loops
+    assert part["face_solid"].shape == (len(faces),)
+    assert part["face_solid"].dtype == np.int32
+    assert part["face_solid"].min() >= -1 and part["face_solid"].max() < len(solids)
+    # Organic faces carry a component, incident faces do not.
+    assert np.array_equal(part["face_solid"] == -1, part["face_component"] >= 0)
+    assert sorted(set(part["face_component"][part["face_component"] >= 0])) == list(range(components))
+    # Each loop is a closed cycle whose consecutive vertices share an edge of the design.
+    edges = {tuple(sorted(e)) for tri in faces for e in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0]))}
+    for loop in part["loops"]:
+        cycle = list(loop["vertices"])
+        assert len(set(cycle)) == len(cycle) >= 3
+        assert all(tuple(sorted((a, b))) in edges for a, b in zip(cycle, cycle[1:] + cycle[:1]))
+    report = result["report"]
+    assert report["counts"]["boundary_loops"] == loops
+    assert report["tolerance"]["mode"] == mode
+    assert set(report["stages"]) == {"mesh", "incidence", "partition"}
+    assert result["cages"] == [] and result["composed"] is None
+
+
+def test_face_source_maps_back_to_input_triangles(native, scenes):
+    design, solids, _, _ = load_scene(native, scenes / "tube")
+    result = native.convert(design, solids)
+    source = result["design"]["face_source"]
+    assert len(source) == len(result["design"]["faces"])
+    out_v = result["design"]["vertices"][result["design"]["faces"]]
+    in_v = design["vertices"][design["faces"][source]]
+    assert np.allclose(out_v, in_v)
+
+
+def test_errors_name_the_object_and_the_problem(native, scenes):
+    design, solids, _, _ = load_scene(native, scenes / "grown_box")
+    open_solid = dict(solids[0], faces=solids[0]["faces"][:-2])
+    with pytest.raises(native.ConversionError) as err:
+        native.convert(design, [open_solid])
+    assert "keep-in 'base' is open" in str(err.value)
+    assert err.value.code == "invalid_input" and err.value.stage == "mesh"
+
+    nan_design = dict(design, vertices=design["vertices"].copy())
+    nan_design["vertices"][5, 2] = np.nan
+    with pytest.raises(native.ConversionError, match="NaN"):
+        native.convert(nan_design, solids)
+    with pytest.raises(native.ConversionError, match="is empty"):
+        native.convert(dict(design, faces=np.zeros((0, 3), np.int32)), solids)
+    with pytest.raises(native.ConversionError, match="N×3"):
+        native.convert(dict(design, vertices=np.zeros((4, 2))), solids)
+    with pytest.raises(native.ConversionError, match="roles are"):
+        native.convert(design, [dict(solids[0], role="keep_maybe")])
+    with pytest.raises(native.ConversionError, match="unknown option 'tolerence'"):
+        native.convert(design, solids, {"tolerence": 1})
+
+
+def test_progress_reports_every_stage_and_can_cancel(native, scenes):
+    design, solids, _, _ = load_scene(native, scenes / "two_arches")
+    calls = []
+    native.convert(design, solids, progress=lambda stage, f: calls.append((stage, f)))
+    assert [s for s in dict.fromkeys(stage for stage, _ in calls)] == ["mesh", "incidence", "partition"]
+    assert all(0.0 <= f <= 1.0 for _, f in calls)
+    with pytest.raises(native.CancelledError) as err:
+        native.convert(design, solids, progress=lambda stage, f: stage != "incidence")
+    assert err.value.stage == "incidence" and err.value.code == "cancelled"
+
+    def broken(stage, fraction):
+        raise ValueError("callback bug")
+    with pytest.raises(native.ConversionError, match="callback bug"):
+        native.convert(design, solids, progress=broken)
+
+
+def test_runs_in_a_worker_thread(native, scenes):
+    """The add-on's pattern: convert in a thread, progress through a shared variable."""
+    design, solids, _, _ = load_scene(native, scenes / "bolt_hole")
+    state = {"stage": None, "result": None}
+
+    def work():
+        state["result"] = native.convert(design, solids, progress=lambda s, f: state.update(stage=s) or True)
+    worker = threading.Thread(target=work)
+    worker.start()
+    worker.join()
+    assert state["stage"] == "partition"
+    assert state["result"]["partition"]["organic_components"] == 1
+
+
+def test_same_input_same_output(native, scenes):
+    design, solids, _, _ = load_scene(native, scenes / "eroded_seed")
+    a = native.convert(design, solids)
+    b = native.convert(design, solids)
+    assert np.array_equal(a["partition"]["face_solid"], b["partition"]["face_solid"])
+    assert [list(l["vertices"]) for l in a["partition"]["loops"]] == [list(l["vertices"]) for l in b["partition"]["loops"]]
+
+
+def test_validate_mesh_counts(native):
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    f = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3]], np.int32)
+    counts = native.validate_mesh(v, f)
+    assert counts["boundary_edges"] == 3 and not counts["closed_manifold"]
+    counts = native.validate_mesh(v, np.vstack([f, [[0, 3, 2]]]))
+    assert counts["closed_manifold"] and counts["signed_volume"] == pytest.approx(1 / 6)
