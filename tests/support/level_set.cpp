@@ -5,6 +5,19 @@
 #include <unordered_map>
 
 namespace genbrep::testing {
+namespace {
+
+TriangleMesh to_mesh(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles) {
+  TriangleMesh mesh;
+  mesh.vertices.resize(static_cast<Eigen::Index>(vertices.size()), 3);
+  for (size_t v = 0; v < vertices.size(); ++v) mesh.vertices.row(v) = vertices[v];
+  mesh.triangles.resize(static_cast<Eigen::Index>(triangles.size()), 3);
+  for (size_t t = 0; t < triangles.size(); ++t)
+    for (int c = 0; c < 3; ++c) mesh.triangles(t, c) = triangles[t][c];
+  return mesh;
+}
+
+}  // namespace
 
 TriangleMesh extract_level_set(const Field& f, const Vec3& origin, double h,
                                const Eigen::Vector3i& cells) {
@@ -69,13 +82,7 @@ TriangleMesh extract_level_set(const Field& f, const Vec3& origin, double h,
           }
         }
       }
-  TriangleMesh mesh;
-  mesh.vertices.resize(static_cast<Eigen::Index>(vertices.size()), 3);
-  for (size_t v = 0; v < vertices.size(); ++v) mesh.vertices.row(v) = vertices[v];
-  mesh.triangles.resize(static_cast<Eigen::Index>(triangles.size()), 3);
-  for (size_t t = 0; t < triangles.size(); ++t)
-    for (int c = 0; c < 3; ++c) mesh.triangles(t, c) = triangles[t][c];
-  return mesh;
+  return to_mesh(vertices, triangles);
 }
 
 double box_sdf(const Vec3& p, const Vec3& lo, const Vec3& hi) {
@@ -105,7 +112,6 @@ double arch_sdf(const Vec3& p, const Vec3& center, double major, double minor) {
 }
 
 TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi, int n) {
-  TriangleMesh mesh;
   std::vector<Vec3> vertices;
   std::vector<std::array<int, 3>> triangles;
   std::unordered_map<int64_t, int> ids;  // lattice point -> vertex, so faces share edges
@@ -140,12 +146,7 @@ TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi, int n) {
           }
         }
     }
-  mesh.vertices.resize(static_cast<Eigen::Index>(vertices.size()), 3);
-  for (size_t i = 0; i < vertices.size(); ++i) mesh.vertices.row(i) = vertices[i];
-  mesh.triangles.resize(static_cast<Eigen::Index>(triangles.size()), 3);
-  for (size_t t = 0; t < triangles.size(); ++t)
-    for (int c = 0; c < 3; ++c) mesh.triangles(t, c) = triangles[t][c];
-  return mesh;
+  return to_mesh(vertices, triangles);
 }
 
 TriangleMesh cylinder_mesh(const Vec3& base, double radius, double height, int segments) {
