@@ -1,0 +1,296 @@
+"""bpy <-> numpy: read input meshes, write the results of a conversion.
+
+Arrays move with foreach_get / foreach_set only. Version differences handled here:
+MeshPolygon.loop_total (read-only from 4.2), edge creases (MeshEdge.crease in 3.x, the
+'crease_edge' attribute from 4.0), smooth shading (Mesh.shade_smooth from 4.1).
+"""
+
+import bpy
+import numpy as np
+
+from . import options, props, results
+
+_LOOP_TOTAL_WRITABLE = not bpy.types.MeshPolygon.bl_rna.properties["loop_total"].is_readonly
+_EDGE_CREASE_PROPERTY = "crease" in bpy.types.MeshEdge.bl_rna.properties
+
+PARTITION_MATERIAL = "genbrep partition"
+
+
+# reading --------------------------------------------------------------------------------
+
+def read_triangles(obj, depsgraph):
+    """World-space vertices (N×3 float64) and triangles (M×3 int32) of obj, modifiers applied."""
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        if mesh is None:
+            return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int32)
+        mesh.calc_loop_triangles()
+        co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("co", co)
+        triangles = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+        mesh.loop_triangles.foreach_get("vertices", triangles)
+    finally:
+        evaluated.to_mesh_clear()
+    matrix = np.array(evaluated.matrix_world, dtype=np.float64)
+    vertices = co.reshape(-1, 3).astype(np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
+    triangles = triangles.reshape(-1, 3)
+    if np.linalg.det(matrix[:3, :3]) < 0.0:  # mirrored: keep outward orientation
+        triangles = triangles[:, [0, 2, 1]]
+    return vertices, np.ascontiguousarray(triangles)
+
+
+def design_grid(obj):
+    """(origin, h) of the voxel grid recorded on a design object, or None."""
+    recorded = {key: obj.get(key) for key in (options.GRID_H_PROPERTY,
+                                              options.GRID_ORIGIN_PROPERTY)
+                if obj.get(key) is not None}
+    return options.grid_from_properties(recorded)
+
+
+def gather_input(scene, depsgraph, design_obj):
+    """(design, solids) as dicts of name, role identifier, vertices, faces (world space).
+
+    Solids are every object of the scene with a solid role, sorted by name, so solid indices
+    in the result are stable run after run.
+    """
+    vertices, faces = read_triangles(design_obj, depsgraph)
+    design = dict(name=design_obj.name, vertices=vertices, faces=faces)
+    solids = []
+    for role in ("KEEP_IN", "KEEP_OUT", "SEED"):
+        for obj in props.objects_with_role(scene, role):
+            vertices, faces = read_triangles(obj, depsgraph)
+            solids.append(dict(name=obj.name, role=role, vertices=vertices, faces=faces))
+    solids.sort(key=lambda s: s["name"])
+    return design, solids
+
+
+# writing --------------------------------------------------------------------------------
+
+def new_mesh(name, vertices, faces):
+    """A mesh of equal-sized polygons (faces K×k int) or, with k == 2, of loose edges."""
+    vertices = np.asarray(vertices, dtype=np.float32).reshape(-1, 3)
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", vertices.ravel())
+    faces = np.asarray(faces, dtype=np.int32)
+    if faces.ndim == 2 and faces.shape[1] == 2:
+        mesh.edges.add(len(faces))
+        mesh.edges.foreach_set("vertices", faces.ravel())
+    elif faces.size:
+        arity = faces.shape[1]
+        mesh.loops.add(faces.size)
+        mesh.loops.foreach_set("vertex_index", faces.ravel())
+        mesh.polygons.add(len(faces))
+        mesh.polygons.foreach_set("loop_start", np.arange(0, faces.size, arity, dtype=np.int32))
+        if _LOOP_TOTAL_WRITABLE:
+            mesh.polygons.foreach_set("loop_total", np.full(len(faces), arity, dtype=np.int32))
+    mesh.update(calc_edges=True)
+    return mesh
+
+
+def set_face_ints(mesh, name, values):
+    attribute = mesh.attributes.new(name, "INT", "FACE")
+    attribute.data.foreach_set("value", np.asarray(values, dtype=np.int32).ravel())
+
+
+def set_face_colours(mesh, name, colours):
+    """Colour per face (K×4), stored per corner so the viewport and Cycles show it."""
+    sizes = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    attribute = mesh.color_attributes.new(name, "FLOAT_COLOR", "CORNER")
+    corner = np.repeat(np.asarray(colours, dtype=np.float32), sizes, axis=0)
+    attribute.data.foreach_set("color", corner.ravel())
+    mesh.color_attributes.active_color = attribute
+    if hasattr(mesh.color_attributes, "render_color_index"):
+        mesh.color_attributes.render_color_index = mesh.color_attributes.active_color_index
+
+
+def set_edge_creases(mesh, pairs, values):
+    """Crease the edges between the vertex pairs; returns how many pairs are not edges."""
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    index = results.edge_indices(edges.reshape(-1, 2), pairs)
+    crease = np.zeros(len(mesh.edges), dtype=np.float32)
+    found = index >= 0
+    crease[index[found]] = np.asarray(values, dtype=np.float32).ravel()[found]
+    if _EDGE_CREASE_PROPERTY:
+        mesh.edges.foreach_set("crease", crease)
+    else:
+        attribute = (mesh.attributes.get("crease_edge")
+                     or mesh.attributes.new("crease_edge", "FLOAT", "EDGE"))
+        attribute.data.foreach_set("value", crease)
+    return int(np.count_nonzero(~found))
+
+
+def shade_smooth(mesh):
+    if hasattr(mesh, "shade_smooth"):
+        mesh.shade_smooth()
+    else:
+        mesh.polygons.foreach_set("use_smooth", np.ones(len(mesh.polygons), dtype=bool))
+
+
+def add_subdivision(obj, subdivision):
+    """Subdivision Surface modifier with every setting from the fitter written explicitly."""
+    modifier = obj.modifiers.new("genbrep Subdivision", "SUBSURF")
+    for name, value in results.subdivision_settings(subdivision).items():
+        setattr(modifier, name, value)
+    return modifier
+
+
+def _partition_material():
+    """Material showing the partition colour attribute (created once, shared by runs)."""
+    material = bpy.data.materials.get(PARTITION_MATERIAL)
+    if material is None:
+        material = bpy.data.materials.new(PARTITION_MATERIAL)
+        material.use_nodes = True
+        nodes, links = material.node_tree.nodes, material.node_tree.links
+        shader = next(n for n in nodes if n.type == "BSDF_PRINCIPLED")
+        attribute = nodes.new("ShaderNodeAttribute")
+        attribute.attribute_name = results.PARTITION_COLOR_ATTRIBUTE
+        attribute.location = (shader.location.x - 250, shader.location.y)
+        links.new(attribute.outputs["Color"], shader.inputs["Base Color"])
+    return material
+
+
+def _colour_material(name, colour):
+    material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    material.diffuse_color = colour
+    material.use_nodes = True
+    shader = next((n for n in material.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
+    if shader is not None:
+        shader.inputs["Base Color"].default_value = colour
+    return material
+
+
+def result_collection(scene, design_name):
+    """The design's result collection, emptied (created and linked to the scene if needed)."""
+    name = results.collection_name(design_name)
+    collection = bpy.data.collections.get(name)
+    if collection is None:
+        collection = bpy.data.collections.new(name)
+    else:
+        remove_objects(collection)
+    if collection.name not in scene.collection.children:
+        scene.collection.children.link(collection)
+    return collection
+
+
+def remove_objects(collection):
+    """Delete the collection's objects and the meshes only they used."""
+    for obj in list(collection.objects):
+        data = obj.data
+        bpy.data.objects.remove(obj, do_unlink=True)
+        if isinstance(data, bpy.types.Mesh) and data.users == 0:
+            bpy.data.meshes.remove(data)
+
+
+def remove_results(design_name):
+    """Delete a design's result collection and its objects; False when there was none."""
+    collection = bpy.data.collections.get(results.collection_name(design_name))
+    if collection is None:
+        return False
+    remove_objects(collection)
+    bpy.data.collections.remove(collection)
+    return True
+
+
+def _hide(obj):
+    """Hidden in viewport (the eye, per view layer) and render; the user can show it again."""
+    obj.hide_render = True
+    try:
+        obj.hide_set(True)
+    except RuntimeError:  # not in the context's view layer (another scene)
+        obj.hide_viewport = True
+
+
+def _link(collection, name, mesh):
+    obj = bpy.data.objects.new(name, mesh)
+    collection.objects.link(obj)
+    return obj
+
+
+def write_results(scene, design_name, solid_roles, result, report_json):
+    """Write a conversion result into the collection 'genbrep <design>'; returns it.
+
+    solid_roles: native role of each solid index. The partition is always written; cages
+    and the composed mesh when the result holds them. The most finished result is shown,
+    the earlier ones are hidden (not deleted).
+    """
+    collection = result_collection(scene, design_name)
+    collection[results.DESIGN_PROPERTY] = design_name
+    collection[results.REPORT_PROPERTY] = report_json
+    try:
+        shown = _write_partition(collection, design_name, solid_roles, result)
+        cages = _write_cages(collection, design_name, result.get("cages") or [])
+        composed = _write_composed(collection, design_name, result.get("composed"))
+    except Exception:
+        remove_objects(collection)
+        raise
+    if composed is not None or cages:
+        for obj in shown:
+            _hide(obj)
+    if composed is not None:
+        for cage in cages:
+            cage.display_type = "WIRE"
+            cage.hide_render = True
+    return collection
+
+
+def _write_partition(collection, design_name, solid_roles, result):
+    design = result["design"]
+    partition = result.get("partition") or {}
+    faces = np.asarray(design["faces"], dtype=np.int32).reshape(-1, 3)
+    mesh = new_mesh(results.partition_name(design_name), design["vertices"], faces)
+    no_label = np.full(len(faces), -1, dtype=np.int32)
+    face_solid = np.asarray(partition.get("face_solid", no_label), dtype=np.int32)
+    face_component = np.asarray(partition.get("face_component", no_label), dtype=np.int32)
+    set_face_ints(mesh, results.PARTITION_SOLID_ATTRIBUTE, face_solid)
+    set_face_ints(mesh, results.PARTITION_COMPONENT_ATTRIBUTE, face_component)
+    if "face_source" in design:
+        set_face_ints(mesh, results.SOURCE_ATTRIBUTE, design["face_source"])
+    set_face_colours(mesh, results.PARTITION_COLOR_ATTRIBUTE,
+                     results.face_colours(face_solid, face_component, solid_roles))
+    mesh.materials.append(_partition_material())
+    written = [_link(collection, results.partition_name(design_name), mesh)]
+
+    edges, _ = results.loop_edges(partition.get("loops") or [])
+    if len(edges):
+        used, local = np.unique(edges, return_inverse=True)
+        vertices = np.asarray(design["vertices"]).reshape(-1, 3)[used]
+        loops = new_mesh(results.loops_name(design_name), vertices, local.reshape(-1, 2))
+        written.append(_link(collection, results.loops_name(design_name), loops))
+    return written
+
+
+def _write_cages(collection, design_name, cages):
+    written = []
+    for index, cage in enumerate(cages):
+        name = results.cage_name(design_name, cage, index)
+        mesh = new_mesh(name, cage["vertices"], np.asarray(cage["faces"]).reshape(-1, 4))
+        pairs = np.asarray(cage.get("crease_edges", ()), dtype=np.int32).reshape(-1, 2)
+        if len(pairs):
+            missing = set_edge_creases(mesh, pairs, cage.get("crease_values", ()))
+            if missing:
+                print(f"genbrep: {name}: {missing} crease edges are not cage edges; ignored")
+        shade_smooth(mesh)
+        component = int(cage.get("component", index))
+        colour = results.component_colour(component)
+        mesh.materials.append(_colour_material(f"genbrep component {component}", colour))
+        obj = _link(collection, name, mesh)
+        obj["genbrep_component"] = component
+        add_subdivision(obj, cage.get("subdivision"))
+        obj.show_wire = True
+        written.append(obj)
+    return written
+
+
+def _write_composed(collection, design_name, composed):
+    if not composed:
+        return None
+    faces = np.asarray(composed["faces"], dtype=np.int32).reshape(-1, 3)
+    mesh = new_mesh(results.composed_name(design_name), composed["vertices"], faces)
+    if "face_source" in composed:
+        set_face_ints(mesh, results.SOURCE_ATTRIBUTE, composed["face_source"])
+    mesh.materials.append(_colour_material("genbrep composed", (0.75, 0.75, 0.78, 1.0)))
+    return _link(collection, results.composed_name(design_name), mesh)

@@ -1,0 +1,94 @@
+"""Render the genbrep results of a .blend to a PNG (Cycles on the CPU), for the docs.
+
+    blender -b converted.blend --python-exit-code 1 -P docs/render_result.py -- \
+        --out docs/partition_boss.png [--samples 32] [--width 960] [--height 540]
+
+Renders what the result collections ("genbrep <design>") show: the partition colours, and
+the cages and composed mesh once the pipeline makes them; everything else is hidden from
+the render. Adds a camera framing the results, a sun and a light grey world.
+"""
+
+import argparse
+import math
+import sys
+
+import bpy
+from mathutils import Vector
+
+
+def parse_args():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    parser = argparse.ArgumentParser(prog="render_result.py")
+    parser.add_argument("--out", required=True, help="PNG to write")
+    parser.add_argument("--samples", type=int, default=32)
+    parser.add_argument("--width", type=int, default=960)
+    parser.add_argument("--height", type=int, default=540)
+    parser.add_argument("--view", type=float, nargs=3, default=(1.0, -1.5, 1.1),
+                        help="direction from the results to the camera")
+    return parser.parse_args(argv)
+
+
+def result_objects(scene):
+    collections = [c for c in scene.collection.children if c.name.startswith("genbrep ")]
+    return [o for c in collections for o in c.all_objects if not o.hide_render]
+
+
+def frame(scene, objects, direction):
+    """Camera looking along -direction at the objects' bounding sphere, filling the frame."""
+    corners = [o.matrix_world @ Vector(c) for o in objects for c in o.bound_box]
+    low = Vector(tuple(min(c[i] for c in corners) for i in range(3)))
+    high = Vector(tuple(max(c[i] for c in corners) for i in range(3)))
+    center, radius = (low + high) / 2, (high - low).length / 2
+    camera = bpy.data.objects.new("render camera", bpy.data.cameras.new("render camera"))
+    scene.collection.objects.link(camera)
+    aspect = scene.render.resolution_y / scene.render.resolution_x
+    half_fov = math.atan(camera.data.sensor_width / 2 * aspect / camera.data.lens)
+    direction = Vector(direction).normalized()
+    camera.location = center + direction * (radius / math.sin(half_fov) * 0.75)
+    camera.rotation_euler = (-direction).to_track_quat("-Z", "Y").to_euler()
+    camera.data.clip_end = radius * 20
+    scene.camera = camera
+
+
+def light(scene):
+    sun = bpy.data.objects.new("render sun", bpy.data.lights.new("render sun", "SUN"))
+    sun.data.energy = 3.0
+    sun.rotation_euler = (math.radians(40), math.radians(10), math.radians(30))
+    scene.collection.objects.link(sun)
+    world = scene.world or bpy.data.worlds.new("render world")
+    scene.world = world
+    world.use_nodes = True
+    background = world.node_tree.nodes.get("Background")
+    background.inputs["Color"].default_value = (0.8, 0.82, 0.85, 1.0)
+    background.inputs["Strength"].default_value = 0.7
+
+
+def main():
+    args = parse_args()
+    scene = bpy.context.scene
+    shown = result_objects(scene)
+    if not shown:
+        print("render_result.py: no genbrep results in this file: convert it first",
+              file=sys.stderr)
+        sys.exit(1)
+    for obj in scene.objects:
+        if obj not in shown:
+            obj.hide_render = True
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = args.samples
+    scene.cycles.use_denoising = False  # this Blender build has no OpenImageDenoise
+    scene.render.resolution_x, scene.render.resolution_y = args.width, args.height
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.compression = 100
+    scene.view_settings.view_transform = "Standard"  # keep the partition colours as written
+    scene.render.filepath = bpy.path.abspath(args.out)
+    frame(scene, shown, args.view)
+    light(scene)
+    bpy.ops.render.render(write_still=True)
+    print(f"render_result.py: wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

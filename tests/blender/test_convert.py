@@ -1,0 +1,135 @@
+"""Convert on fixtures: the result collection, re-runs, cancelling, undo, input errors."""
+
+import json
+
+import bmesh
+import bpy
+import numpy as np
+import pytest
+
+from conftest import needs_native, scene_state
+from genbrep import job, native, operators, results
+
+pytestmark = needs_native
+
+COLLECTION = results.collection_name("design")
+
+
+def _convert(**settings):
+    return bpy.ops.genbrep.convert("INVOKE_DEFAULT", **settings)
+
+
+def _face_ints(mesh, name):
+    values = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.attributes[name].data.foreach_get("value", values)
+    return values
+
+
+def test_convert_writes_partition_collection(open_fixture):
+    open_fixture("components")
+    assert _convert() == {"FINISHED"}
+    collection = bpy.data.collections[COLLECTION]
+    assert collection.name in bpy.context.scene.collection.children
+    names = sorted(o.name for o in collection.objects)
+    assert names == ["design boundary loops", "design partition"]
+
+    mesh = collection.objects["design partition"].data
+    solid = _face_ints(mesh, results.PARTITION_SOLID_ATTRIBUTE)
+    component = _face_ints(mesh, results.PARTITION_COMPONENT_ATTRIBUTE)
+    assert set(np.unique(solid)) == {-1, 0, 1, 2, 3}  # organic and the four blocks
+    assert set(np.unique(component[solid == -1])) == {0, 1, 2, 3}  # one per tube
+    assert np.all(component[solid >= 0] == -1)
+    assert mesh.color_attributes[results.PARTITION_COLOR_ATTRIBUTE].domain == "CORNER"
+    assert mesh.materials[0].name == "genbrep partition"
+    report = json.loads(collection[results.REPORT_PROPERTY])
+    assert report["counts"]["organic_components"] == 4
+
+
+def test_rerun_replaces_results(open_fixture):
+    open_fixture("boss")
+    assert _convert() == {"FINISHED"}
+    first = {kind: len(getattr(bpy.data, kind)) for kind in ("objects", "meshes", "collections")}
+    assert _convert() == {"FINISHED"}
+    second = {kind: len(getattr(bpy.data, kind)) for kind in ("objects", "meshes", "collections")}
+    assert first == second
+    assert not [name for name in bpy.data.objects.keys() if name.endswith(".001")]
+
+
+def test_cancel_leaves_scene_unchanged(open_fixture):
+    open_fixture("seed")
+    before = scene_state()
+    outcome = operators.convert_now(bpy.context, bpy.context.scene.genbrep_settings,
+                                    on_progress=lambda run, stage, fraction: run.cancel())
+    assert outcome.status == "CANCELLED" and "scene unchanged" in outcome.message
+    assert scene_state() == before
+
+
+def test_cancel_of_threaded_job_drops_its_result(open_fixture):
+    open_fixture("arches")
+    before = scene_state()
+    prepared = operators.prepare(bpy.context, bpy.context.scene.genbrep_settings)
+    prepared.job.start()
+    prepared.job.cancel()
+    assert prepared.job.wait(timeout=30)
+    assert prepared.job.state == job.CANCELLED
+    assert operators.finish(prepared).status == "CANCELLED"
+    assert scene_state() == before
+
+
+def test_undo_removes_results(open_fixture):
+    open_fixture("boss")
+    bpy.ops.ed.undo_push(message="before convert")
+    assert _convert() == {"FINISHED"}
+    if not bpy.ops.ed.undo.poll():
+        pytest.skip("ed.undo cannot run under blender -b (no undo stack without a window); "
+                    "test_modal.py checks undo in a windowed Blender")
+    bpy.ops.ed.undo()
+    assert COLLECTION not in bpy.data.collections
+
+
+def test_convert_is_one_undo_step():
+    assert "UNDO" in operators.GENBREP_OT_convert.bl_options
+
+
+def test_stop_after_incidence(open_fixture):
+    open_fixture("boss")
+    assert _convert(until="INCIDENCE") == {"FINISHED"}
+    assert "design partition" in bpy.data.collections[COLLECTION].objects
+
+
+def test_stage_missing_from_build_is_reported(open_fixture):
+    open_fixture("boss")
+    missing = [s for s in ("compose", "fit") if s not in native.stages()]
+    if not missing:
+        pytest.skip("this build runs every stage")
+    with pytest.raises(RuntimeError, match=f"stage '{missing[0]}' is not in this"):
+        _convert(until=missing[0].upper())
+    assert COLLECTION not in bpy.data.collections
+
+
+def test_open_keep_in_is_named(open_fixture):
+    open_fixture("boss")
+    mesh = bpy.data.objects["mount"].data
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    bm.faces.ensure_lookup_table()
+    bmesh.ops.delete(bm, geom=[bm.faces[0]], context="FACES_ONLY")
+    bm.to_mesh(mesh)
+    bm.free()
+    with pytest.raises(RuntimeError, match="keep-in 'mount' is not a closed solid"):
+        _convert()
+
+
+def test_no_design_is_reported(open_fixture):
+    open_fixture("boss")
+    bpy.data.objects["design"].genbrep.role = "NONE"
+    with pytest.raises(RuntimeError, match="no object has the role Design"):
+        _convert()
+
+
+def test_grid_incidence_uses_design_grid(open_fixture):
+    open_fixture("boss")
+    assert bpy.ops.genbrep.use_design_grid() == {"FINISHED"}
+    settings = bpy.context.scene.genbrep_settings
+    assert settings.incidence == "GRID" and settings.grid_h == pytest.approx(0.1)
+    assert _convert() == {"FINISHED"}

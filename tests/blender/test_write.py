@@ -1,0 +1,90 @@
+"""Writing results the pipeline does not make yet (cages, composed mesh) from a hand-made
+result dict in the module's format: no native module needed."""
+
+import bpy
+import numpy as np
+import pytest
+
+from genbrep import bridge, report, results
+
+
+def _cube_cage():
+    vertices = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    quads = np.array([(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4),
+                      (1, 5, 7, 3)], np.int32)
+    return vertices, quads
+
+
+def _result():
+    vertices, quads = _cube_cage()
+    triangles = np.array([(0, 1, 2), (0, 2, 3), (0, 3, 1), (1, 3, 2)], np.int32)
+    tetra = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)], float)
+    return {
+        "report": {"stages": {"mesh": 0.1, "compose": 0.2}, "diagnostics": ["a warning"]},
+        "design": {"vertices": tetra, "faces": triangles,
+                   "face_source": np.arange(4, dtype=np.int32)},
+        "partition": {"face_solid": np.array([0, -1, -1, 1], np.int32),
+                      "face_component": np.array([-1, 0, 0, -1], np.int32),
+                      "loops": [{"vertices": np.array([0, 1, 2], np.int32), "solids": [0]}]},
+        "cages": [{"name": "arm", "component": 0, "vertices": vertices, "faces": quads,
+                   "crease_edges": np.array([[0, 1], [3, 1], [0, 7]], np.int32),
+                   "crease_values": np.array([1.0, 0.5, 1.0], np.float32),
+                   "subdivision": {"boundary_smooth": "PRESERVE_CORNERS",
+                                   "use_limit_surface": True, "quality": 4, "levels": 3}}],
+        "composed": {"vertices": tetra, "faces": triangles,
+                     "face_source": np.arange(4, dtype=np.int32)},
+    }
+
+
+def _edge_creases(mesh):
+    values = np.empty(len(mesh.edges), np.float32)
+    if "crease" in bpy.types.MeshEdge.bl_rna.properties:
+        mesh.edges.foreach_get("crease", values)
+    else:
+        mesh.attributes["crease_edge"].data.foreach_get("value", values)
+    edges = np.empty(len(mesh.edges) * 2, np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    return {tuple(sorted(e)): v for e, v in zip(edges.reshape(-1, 2).tolist(), values) if v}
+
+
+def test_cages_and_composed_are_written(empty_scene):
+    collection = bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], _result(),
+                                      report.to_json({}))
+    objects = {o.name: o for o in collection.objects}
+    assert set(objects) == {"part partition", "part boundary loops", "part cage arm",
+                            "part composed"}
+    cage = objects["part cage arm"]
+    assert len(cage.data.polygons) == 6 and all(p.loop_total == 4 for p in cage.data.polygons)
+    modifier = cage.modifiers["genbrep Subdivision"]
+    assert (modifier.type, modifier.subdivision_type) == ("SUBSURF", "CATMULL_CLARK")
+    assert (modifier.levels, modifier.quality) == (3, 4)
+    assert modifier.use_limit_surface and modifier.use_creases
+    assert modifier.boundary_smooth == "PRESERVE_CORNERS"
+    # (0, 7) is not a cage edge and is ignored
+    assert _edge_creases(cage.data) == {(0, 1): pytest.approx(1.0), (1, 3): pytest.approx(0.5)}
+    assert cage["genbrep_component"] == 0
+    assert objects["part partition"].hide_render and not objects["part composed"].hide_render
+    assert len(objects["part boundary loops"].data.edges) == 3
+
+
+def test_rewrite_replaces_objects(empty_scene):
+    for _ in range(2):
+        bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], _result(), "{}")
+    assert len(bpy.data.collections["genbrep part"].objects) == 4
+    assert len(bpy.data.meshes) == 4
+    assert bridge.remove_results("part")
+    assert "genbrep part" not in bpy.data.collections and len(bpy.data.meshes) == 0
+
+
+def test_partition_only_result_is_written(empty_scene):
+    result = _result()
+    result.update(cages=[], composed=None)
+    collection = bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], result, "{}")
+    partition = collection.objects["part partition"]
+    assert not partition.hide_render
+    colours = np.empty(len(partition.data.loops) * 4, np.float32)
+    partition.data.color_attributes[results.PARTITION_COLOR_ATTRIBUTE].data.foreach_get(
+        "color", colours)
+    per_face = colours.reshape(-1, 3, 4)[:, 0]
+    assert not np.allclose(per_face[0], per_face[3])  # two different solids
+    np.testing.assert_allclose(per_face[1], per_face[2])  # the same organic component
