@@ -16,9 +16,11 @@ namespace {
 const char* kUsage =
     "usage: genbrep convert --design FILE [--keep-in FILE]... [--keep-out FILE]...\n"
     "                       [--seed FILE]... [--tolerance D | --grid OX,OY,OZ,H]\n"
-    "                       [--until STAGE] --out DIR\n"
+    "                       [--until STAGE] [--target-edge-length L] [--density S]\n"
+    "                       [--field-obj] --out DIR\n"
     "       genbrep --version\n"
-    "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json and DIR/partition.ply.\n";
+    "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json, DIR/partition.ply and, with\n"
+    "--field-obj, DIR/field.obj (a cross per organic triangle, singularities as points).\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -42,6 +44,7 @@ struct Command {
   Inputs inputs;
   Options options;
   fs::path out;
+  bool field_obj = false;
 };
 
 Command parse(int argc, char** argv) {
@@ -74,6 +77,12 @@ Command parse(int argc, char** argv) {
       cmd.options.incidence.grid_origin = Vec3(numbers[0], numbers[1], numbers[2]);
       cmd.options.incidence.grid_h = numbers[3];
       have_grid = true;
+    } else if (flag == "--target-edge-length") {
+      cmd.options.field.target_edge_length = parse_number(value(), flag);
+    } else if (flag == "--density") {
+      cmd.options.field.density = parse_number(value(), flag);
+    } else if (flag == "--field-obj") {
+      cmd.field_obj = true;
     } else if (flag == "--until") {
       cmd.options.until = value();
     } else if (flag == "--out") {
@@ -96,13 +105,19 @@ int run_convert(int argc, char** argv) {
   if (ec) throw Error(Code::FileError, "cannot create '" + cmd.out.string() + "': " + ec.message());
   write_text_file((cmd.out / "report.json").string(), result.report_json);
   std::cout << "wrote " << (cmd.out / "report.json").string();
-  if (!result.partition.face_solid.empty()) {
+  if (ran(result, "partition")) {
     write_partition_ply((cmd.out / "partition.ply").string(), result.design, result.partition);
     std::cout << " and " << (cmd.out / "partition.ply").string() << " ("
               << result.partition.organic_components << " organic components, "
               << result.partition.loops.size() << " boundary loops)";
   }
   std::cout << '\n';
+  if (cmd.field_obj) {
+    if (!ran(result, "field")) throw UsageError("--field-obj needs the field stage (check --until)");
+    write_field_obj((cmd.out / "field.obj").string(), to_trimesh(result.design), result.field);
+    std::cout << "wrote " << (cmd.out / "field.obj").string() << " (" << result.field.singularities.size()
+              << " singularities)\n";
+  }
   return 0;
 }
 

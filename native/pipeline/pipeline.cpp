@@ -9,7 +9,7 @@ namespace genbrep {
 const char* const kVersion = "0.1.0";
 
 const std::vector<std::string>& stage_names() {
-  static const std::vector<std::string> names{"mesh", "incidence", "partition"};
+  static const std::vector<std::string> names{"mesh", "incidence", "partition", "field"};
   return names;
 }
 
@@ -36,12 +36,20 @@ void run_stage(const std::string& stage, Result* result, const Context& context,
 
 }  // namespace
 
+bool ran(const Result& result, const std::string& stage) {
+  return std::find(result.stages_run.begin(), result.stages_run.end(), stage) != result.stages_run.end();
+}
+
 Result convert(const Inputs& inputs, const Options& options, const Context& context) {
   const auto& names = stage_names();
   const std::string until = options.until.empty() ? names.back() : options.until;
   const auto last = std::find(names.begin(), names.end(), until);
   GENBREP_CHECK(last != names.end(), Code::InvalidInput,
-                "unknown stage '" + until + "'; stages are mesh, incidence, partition");
+                "unknown stage '" + until + "'; stages are " + [&] {
+                  std::string list;
+                  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+                  return list;
+                }());
   auto wanted = [&](const char* stage) {
     return std::find(names.begin(), last + 1, stage) != last + 1;
   };
@@ -67,10 +75,16 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
       result.incidence = compute_incidence(result.design, *solids, options.incidence, context);
     });
   }
+  std::unique_ptr<TriMesh> mesh;
   if (wanted("partition")) {
     run_stage("partition", &result, context, [&] {
-      const TriMesh mesh = to_trimesh(result.design);
-      result.partition = partition(mesh, result.incidence, solids->size(), options.partition, context);
+      mesh = std::make_unique<TriMesh>(to_trimesh(result.design));
+      result.partition = partition(*mesh, result.incidence, solids->size(), options.partition, context);
+    });
+  }
+  if (wanted("field")) {
+    run_stage("field", &result, context, [&] {
+      result.field = compute_field(*mesh, result.partition, options.field, context);
     });
   }
   result.report_json = make_report(inputs, options, result);

@@ -10,6 +10,7 @@
 #include "core/context.h"
 #include "core/error.h"
 #include "core/types.h"
+#include "field/field.h"
 #include "incidence/incidence.h"
 #include "mesh/mesh.h"
 #include "partition/partition.h"
@@ -24,6 +25,7 @@ const std::vector<std::string>& stage_names();
 struct Options {
   IncidenceOptions incidence;
   PartitionOptions partition;
+  FieldOptions field;
   std::string until;  // last stage to run; empty = all
 };
 
@@ -43,6 +45,7 @@ struct Result {
   std::vector<SolidInput> solids;  // prepared solids, same order as the inputs
   Incidence incidence;
   Partition partition;
+  CrossField field;                // cross and size field on the organic region
   std::vector<std::string> stages_run;
   std::vector<StageTiming> timings;
   Diagnostics diagnostics;         // the mesh stage's notes (welds, flips)
@@ -50,6 +53,9 @@ struct Result {
 };
 
 Result convert(const Inputs& inputs, const Options& options, const Context& context);
+
+// Whether `stage` ran in the conversion that gave `result`.
+bool ran(const Result& result, const std::string& stage);
 
 // report.json of a result (also stored in Result::report_json).
 std::string make_report(const Inputs& inputs, const Options& options, const Result& result);

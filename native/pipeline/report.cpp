@@ -79,9 +79,35 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     }
     report["loops"] = loops;
   }
+  if (ran(result, "field")) {
+    const CrossField& f = result.field;
+    json field;
+    field["target_edge_length"] = f.target_edge_length;
+    field["min_edge_length"] = f.min_edge_length;
+    field["tolerance_epsilon"] = f.tolerance;
+    field["kappa_max"] = f.kappa_max;
+    json components = json::array();
+    for (int c = 0; c < p.organic_components; ++c) {
+      int positive = 0, negative = 0, on_boundary = 0;
+      for (const auto& s : f.singularities) {
+        if (s.component != c) continue;
+        positive += s.index > 0;
+        negative += s.index < 0;
+        on_boundary += s.on_boundary;
+      }
+      components.push_back({{"component", c},
+                            {"singularities_positive", positive},
+                            {"singularities_negative", negative},
+                            {"singularities_on_boundary", on_boundary},
+                            {"index_sum_quarter_turns", f.index_sum(c)}});
+    }
+    field["components"] = components;
+    report["field"] = field;
+  }
   json diagnostics = result.diagnostics;
   for (const auto& d : result.incidence.diagnostics) diagnostics.push_back(d);
   for (const auto& d : p.diagnostics) diagnostics.push_back(d);
+  for (const auto& d : result.field.diagnostics) diagnostics.push_back(d);
   report["diagnostics"] = diagnostics;
   return report.dump(2);
 }

@@ -96,6 +96,11 @@ Options to_options(const py::object& obj) {
       options.incidence.grid_origin = Vec3(o[0], o[1], o[2]);
     } else if (key == "grid_h") {
       options.incidence.grid_h = value.cast<double>();
+    } else if (key == "target_edge_length") {
+      options.field.target_edge_length = value.is_none() ? 0.0 : value.cast<double>();
+    } else if (key == "size_scale") {
+      options.field.density = value.cast<double>();
+      if (!(options.field.density > 0)) throw Error(Code::InvalidInput, "option size_scale must be positive");
     } else if (key == "until") {
       options.until = value.is_none() ? "" : value.cast<std::string>();
     } else {
@@ -173,6 +178,25 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
   } else {
     out["partition"] = py::none();
   }
+  if (ran(result, "field")) {
+    const CrossField& f = result.field;
+    py::dict field;
+    field["direction"] = matrix_to_array(f.direction);
+    field["size_u"] = py::array_t<double>(f.size_u.size(), f.size_u.data());
+    field["size_v"] = py::array_t<double>(f.size_v.size(), f.size_v.data());
+    std::vector<int> vertices, index, component;
+    for (const auto& s : f.singularities) {
+      vertices.push_back(s.vertex);
+      index.push_back(s.index);
+      component.push_back(s.component);
+    }
+    field["singular_vertices"] = vector_to_array(vertices);
+    field["singular_index"] = vector_to_array(index);
+    field["singular_component"] = vector_to_array(component);
+    out["field"] = field;
+  } else {
+    out["field"] = py::none();
+  }
   out["cages"] = py::list();
   out["composed"] = py::none();
   return out;
@@ -204,6 +228,9 @@ PYBIND11_MODULE(genbrep_native, m) {
   m.attr("ConversionError") = py::handle(g_conversion_error);
   m.attr("CancelledError") = py::handle(g_cancelled_error);
   m.attr("STAGES") = py::tuple(py::cast(stage_names()));
+  // Option keys convert() accepts, so callers can send only what this build understands.
+  m.attr("OPTION_KEYS") = py::make_tuple("tolerance", "incidence", "grid_origin", "grid_h", "until",
+                                         "target_edge_length", "size_scale");
 
   m.def(
       "convert",

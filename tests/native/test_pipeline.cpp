@@ -66,13 +66,16 @@ TEST(Pipeline, TwoArchesGiveTwoComponentsAndFourLoops) {
   const auto report = nlohmann::json::parse(r.report_json);
   EXPECT_EQ(report["counts"]["organic_components"], 2);
   EXPECT_EQ(report["counts"]["boundary_loops"], 4);
-  EXPECT_EQ(report["stages_run"], (std::vector<std::string>{"mesh", "incidence", "partition"}));
+  EXPECT_EQ(report["stages_run"], stage_names());
+  // Each arch is an annulus (χ = 0): its field's indices sum to zero.
+  ASSERT_EQ(report["field"]["components"].size(), 2u);
+  for (const auto& c : report["field"]["components"]) EXPECT_EQ(c["index_sum_quarter_turns"], 0);
   EXPECT_TRUE(report["tolerance"]["derived"].get<bool>());
   EXPECT_EQ(report["counts"]["incident_triangles_per_solid"].size(), 4u);
   for (const auto& n : report["counts"]["incident_triangles_per_solid"]) EXPECT_GT(n.get<int>(), 100);
   EXPECT_EQ(report["counts"]["organic_triangles"].get<int>() + report["counts"]["incident_triangles"].get<int>(),
             report["counts"]["triangles"].get<int>());
-  for (const char* stage : {"mesh", "incidence", "partition"}) EXPECT_TRUE(report["stages"].contains(stage));
+  for (const auto& stage : stage_names()) EXPECT_TRUE(report["stages"].contains(stage)) << stage;
 }
 
 TEST(Pipeline, SameInputGivesSameOutput) {

@@ -11,7 +11,8 @@ SCENES = ["grown_box", "tube", "two_arches", "eroded_seed", "bolt_hole"]
 
 def test_module_describes_itself(native):
     assert native.__version__.count(".") == 2
-    assert native.STAGES[:3] == ("mesh", "incidence", "partition")
+    assert native.STAGES[:4] == ("mesh", "incidence", "partition", "field")
+    assert "tolerance" in native.OPTION_KEYS and "size_scale" in native.OPTION_KEYS
     assert issubclass(native.CancelledError, native.ConversionError)
 
 
@@ -40,7 +41,15 @@ def test_partition_of_each_scene(native, scenes, scene, mode):
     report = result["report"]
     assert report["counts"]["boundary_loops"] == loops
     assert report["tolerance"]["mode"] == mode
-    assert set(report["stages"]) == {"mesh", "incidence", "partition"}
+    assert tuple(report["stages"]) == native.STAGES
+    # Field: one unit direction per organic face; indices sum to 4χ per component.
+    field = result["field"]
+    organic = part["face_solid"] == -1
+    assert np.allclose(np.linalg.norm(field["direction"][organic], axis=1), 1.0)
+    assert np.all(field["size_u"][organic] > 0)
+    chi = {"grown_box": 1, "tube": 0, "two_arches": 0, "eroded_seed": 1, "bolt_hole": 1}[scene]
+    for c in range(components):
+        assert field["singular_index"][field["singular_component"] == c].sum() == 4 * chi
     assert result["cages"] == [] and result["composed"] is None
 
 
@@ -80,7 +89,7 @@ def test_progress_reports_every_stage_and_can_cancel(native, scenes):
     design, solids, _, _ = load_scene(native, scenes / "two_arches")
     calls = []
     native.convert(design, solids, progress=lambda stage, f: calls.append((stage, f)))
-    assert [s for s in dict.fromkeys(stage for stage, _ in calls)] == ["mesh", "incidence", "partition"]
+    assert tuple(dict.fromkeys(stage for stage, _ in calls)) == native.STAGES
     assert all(0.0 <= f <= 1.0 for _, f in calls)
     with pytest.raises(native.CancelledError) as err:
         native.convert(design, solids, progress=lambda stage, f: stage != "incidence")
@@ -102,7 +111,7 @@ def test_runs_in_a_worker_thread(native, scenes):
     worker = threading.Thread(target=work)
     worker.start()
     worker.join()
-    assert state["stage"] == "partition"
+    assert state["stage"] == native.STAGES[-1]
     assert state["result"]["partition"]["organic_components"] == 1
 
 
