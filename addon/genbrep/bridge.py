@@ -260,7 +260,29 @@ def _write_partition(collection, design_name, solid_roles, result):
         vertices = np.asarray(design["vertices"]).reshape(-1, 3)[used]
         loops = new_mesh(results.loops_name(design_name), vertices, local.reshape(-1, 2))
         written.append(_link(collection, results.loops_name(design_name), loops))
+    written.extend(_write_field(collection, design_name, design, face_solid, result.get("field")))
     return written
+
+
+def _write_field(collection, design_name, design, face_solid, field):
+    """The cross field as edges (a cross per organic face) and its singular vertices as
+    points with an int attribute 'genbrep_index' (quarter turns). Hidden at first: dense."""
+    if not field:
+        return []
+    points, edges = results.field_crosses(design["vertices"], design["faces"], field["direction"],
+                                          np.asarray(face_solid) == -1)
+    crosses = _link(collection, results.field_name(design_name),
+                    new_mesh(results.field_name(design_name), points, edges))
+    singular = np.asarray(field["singular_vertices"], dtype=np.int64)
+    at = np.asarray(design["vertices"]).reshape(-1, 3)[singular]
+    points_mesh = new_mesh(results.singularities_name(design_name), at, np.zeros((0, 2), np.int32))
+    attribute = points_mesh.attributes.new("genbrep_index", "INT", "POINT")
+    attribute.data.foreach_set("value", np.asarray(field["singular_index"], dtype=np.int32))
+    singularities = _link(collection, results.singularities_name(design_name), points_mesh)
+    for obj in (crosses, singularities):
+        obj.hide_render = True
+        obj.hide_set(True)
+    return [crosses, singularities]
 
 
 def _write_cages(collection, design_name, cages):

@@ -125,3 +125,36 @@ def subdivision_settings(subdivision):
         "use_creases": True,
         "uv_smooth": "PRESERVE_BOUNDARIES",
     }
+
+
+def field_name(design_name):
+    return f"{design_name} cross field"
+
+
+def singularities_name(design_name):
+    return f"{design_name} singularities"
+
+
+def field_crosses(vertices, faces, direction, organic, arm=0.35):
+    """A cross of two edges at the centre of every organic face, to show the cross field.
+
+    vertices (N, 3), faces (M, 3), direction (M, 3) unit field direction per face,
+    organic (M,) bool. Each arm is `arm` times the face's mean edge length, one along the
+    direction and one along normal × direction. Returns (4K, 3) float64 points and (2K, 2)
+    int32 edges for the K organic faces.
+    """
+    vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)[organic]
+    u = np.asarray(direction, dtype=np.float64).reshape(-1, 3)[organic]
+    corners = vertices[faces]                                   # (K, 3, 3)
+    centre = corners.mean(axis=1)
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    v = np.cross(normal, u)
+    size = arm * np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2).mean(axis=1)
+    size = size[:, None]
+    points = np.stack([centre - size * u, centre + size * u, centre - size * v, centre + size * v], axis=1)
+    count = len(faces)
+    base = 4 * np.arange(count, dtype=np.int32)[:, None]
+    edges = np.concatenate([base + [0, 1], base + [2, 3]], axis=1).reshape(-1, 2)
+    return points.reshape(-1, 3), edges.astype(np.int32)

@@ -31,7 +31,8 @@ def test_convert_writes_partition_collection(open_fixture):
     collection = bpy.data.collections[COLLECTION]
     assert collection.name in bpy.context.scene.collection.children
     names = sorted(o.name for o in collection.objects)
-    assert names == ["design boundary loops", "design partition"]
+    assert names == ["design boundary loops", "design cross field", "design partition",
+                     "design singularities"]
 
     mesh = collection.objects["design partition"].data
     solid = _face_ints(mesh, results.PARTITION_SOLID_ATTRIBUTE)
@@ -43,6 +44,17 @@ def test_convert_writes_partition_collection(open_fixture):
     assert mesh.materials[0].name == "genbrep partition"
     report = json.loads(collection[results.REPORT_PROPERTY])
     assert report["counts"]["organic_components"] == 4
+
+    # The cross field: a two-edge cross per organic face, hidden until the user shows it;
+    # singular vertices with their indices, which sum to 4χ = 0 per tube (annuli).
+    crosses = collection.objects["design cross field"]
+    assert len(crosses.data.edges) == 2 * int(np.sum(solid == -1))
+    assert crosses.hide_get() and crosses.hide_render
+    points = collection.objects["design singularities"].data
+    index = np.empty(len(points.vertices), dtype=np.int32)
+    points.attributes["genbrep_index"].data.foreach_get("value", index)
+    assert index.sum() == 0 and set(np.unique(index)) <= {-1, 1}
+    assert [c["index_sum_quarter_turns"] for c in report["field"]["components"]] == [0, 0, 0, 0]
 
 
 def test_rerun_replaces_results(open_fixture):

@@ -370,3 +370,17 @@ def test_native_stages_and_option_keys_of_a_module():
     assert native.stages(module) == ("mesh",)
     assert native.option_keys(module) == frozenset({"fitting"})
     assert native.option_keys(types.SimpleNamespace()) is None
+
+
+def test_field_crosses_lie_in_each_face_and_are_perpendicular():
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    faces = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3]])
+    direction = np.array([[1, 0, 0], [0, 0, 1], [0, 1, 0]], float)
+    organic = np.array([True, True, False])
+    points, edges = results.field_crosses(vertices, faces, direction, organic)
+    assert points.shape == (8, 3) and edges.shape == (4, 2)
+    arms = points[edges[:, 1]] - points[edges[:, 0]]
+    normals = np.array([[0, 0, 1], [0, 1, 0]], float).repeat(2, axis=0)
+    assert np.allclose(np.sum(arms * normals, axis=1), 0)          # in the face plane
+    assert np.allclose(np.sum(arms[0::2] * arms[1::2], axis=1), 0)  # arms perpendicular
+    assert np.allclose(arms[0] / np.linalg.norm(arms[0]), [1, 0, 0])
