@@ -215,6 +215,8 @@ auto guarded(Fn&& fn) {
 
 }  // namespace
 
+void bind_fit(py::module_& m);  // fit_bindings.cpp: limit_points, fit_cage
+
 PYBIND11_MODULE(genbrep_native, m) {
   m.doc() = "genbrep native core: generative design to editable cages and a watertight solid";
   m.attr("__version__") = kVersion;
@@ -228,6 +230,7 @@ PYBIND11_MODULE(genbrep_native, m) {
   m.attr("ConversionError") = py::handle(g_conversion_error);
   m.attr("CancelledError") = py::handle(g_cancelled_error);
   m.attr("STAGES") = py::tuple(py::cast(stage_names()));
+  bind_fit(m);
   // Option keys convert() accepts, so callers can send only what this build understands.
   m.attr("OPTION_KEYS") = py::make_tuple("tolerance", "incidence", "grid_origin", "grid_h", "until",
                                          "target_edge_length", "size_scale");
