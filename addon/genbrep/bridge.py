@@ -238,8 +238,9 @@ def write_results(scene, design_name, solid_roles, result, report_json):
 
 
 def _write_partition(collection, design_name, solid_roles, result):
-    design = result["design"]
-    partition = result.get("partition") or {}
+    # After §5.3 relaxation the later stages work on the relaxed design: show that one.
+    design = result.get("relaxed") or result["design"]
+    partition = design.get("partition") or result.get("partition") or {}
     faces = np.asarray(design["faces"], dtype=np.int32).reshape(-1, 3)
     mesh = new_mesh(results.partition_name(design_name), design["vertices"], faces)
     no_label = np.full(len(faces), -1, dtype=np.int32)

@@ -19,7 +19,8 @@ const char* kUsage =
     "                       [--until STAGE] [--target-edge-length L] [--density S]\n"
     "                       [--field-obj] --out DIR\n"
     "       genbrep --version\n"
-    "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json, DIR/partition.ply and, with\n"
+    "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json, DIR/partition.ply, DIR/relaxed.ply\n"
+    "(the design after boundary relaxation, same face properties) and, with\n"
     "--field-obj, DIR/field.obj (a cross per organic triangle, singularities as points).\n";
 
 struct UsageError : std::runtime_error {
@@ -112,9 +113,13 @@ int run_convert(int argc, char** argv) {
               << result.partition.loops.size() << " boundary loops)";
   }
   std::cout << '\n';
+  if (ran(result, "relax")) {
+    write_partition_ply((cmd.out / "relaxed.ply").string(), result.relaxed.design, result.relaxed.partition);
+    std::cout << "wrote " << (cmd.out / "relaxed.ply").string() << '\n';
+  }
   if (cmd.field_obj) {
     if (!ran(result, "field")) throw UsageError("--field-obj needs the field stage (check --until)");
-    write_field_obj((cmd.out / "field.obj").string(), to_trimesh(result.design), result.field);
+    write_field_obj((cmd.out / "field.obj").string(), to_trimesh(result.relaxed.design), result.field);
     std::cout << "wrote " << (cmd.out / "field.obj").string() << " (" << result.field.singularities.size()
               << " singularities)\n";
   }

@@ -56,28 +56,43 @@ Partition partition(const TriMesh& mesh, const Incidence& incidence, int solid_c
   GENBREP_CHECK(incidence.vertex_count() == static_cast<int>(mesh.n_vertices()), Code::Internal,
                 "incidence has " + std::to_string(incidence.vertex_count()) +
                     " vertices, the design " + std::to_string(mesh.n_vertices()));
-  Partition out;
   // §4.2: a triangle is incident iff all three vertices are; then I(T) is their union.
-  std::vector<char> organic(static_cast<size_t>(n_faces), 0);
   std::vector<std::vector<int>> face_sets(static_cast<size_t>(n_faces));
   for (const auto f : mesh.faces()) {
     auto& set = face_sets[f.idx()];
     for (const auto v : mesh.fv_range(f)) {
       if (!incidence.incident(v.idx())) {
-        organic[f.idx()] = 1;
+        set.clear();
         break;
       }
       set.insert(set.end(), incidence.solids.begin() + incidence.offsets[v.idx()],
                  incidence.solids.begin() + incidence.offsets[v.idx() + 1]);
     }
-    if (organic[f.idx()]) {
-      set.clear();
-      continue;
-    }
-    std::sort(set.begin(), set.end());
-    set.erase(std::unique(set.begin(), set.end()), set.end());
   }
   context.step(kStage, 0.2);
+  return partition_faces(mesh, std::move(face_sets), solid_count, options, context);
+}
+
+Partition partition_faces(const TriMesh& mesh, std::vector<std::vector<int>> face_sets,
+                          int solid_count, const PartitionOptions& options,
+                          const Context& context) {
+  const int n_faces = static_cast<int>(mesh.n_faces());
+  GENBREP_CHECK(static_cast<int>(face_sets.size()) == n_faces, Code::Internal,
+                "face labels for " + std::to_string(face_sets.size()) +
+                    " triangles, the mesh has " + std::to_string(n_faces));
+  Partition out;
+  std::vector<char> organic(static_cast<size_t>(n_faces), 0);
+  for (int f = 0; f < n_faces; ++f) {
+    auto& set = face_sets[f];
+    std::sort(set.begin(), set.end());
+    set.erase(std::unique(set.begin(), set.end()), set.end());
+    organic[f] = set.empty();
+    for (int s : set) {
+      GENBREP_CHECK(s >= 0 && s < solid_count, Code::Internal,
+                    "triangle " + std::to_string(f) + " labelled with solid " + std::to_string(s) +
+                        " of " + std::to_string(solid_count));
+    }
+  }
 
   // §5.1: reassign incident triangles around non-manifold boundary vertices to O until
   // every boundary vertex joins exactly two boundary edges.

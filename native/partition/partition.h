@@ -8,6 +8,8 @@
 // non-manifold boundary vertices to O, iterated to convergence) every boundary vertex
 // has exactly two boundary edges, so every loop is a simple closed vertex cycle. Loops
 // run along the organic triangles' orientation: the organic side is on the left.
+// partition_faces() starts from triangle labels I(T) instead (a remeshed design whose
+// labels were carried through, relax/).
 // Complexity: O(|T|) per repair round; rounds are few in practice (§5.1).
 #pragma once
 #include <vector>
@@ -50,5 +52,13 @@ struct Partition {
 
 Partition partition(const TriMesh& design, const Incidence& incidence, int solid_count,
                     const PartitionOptions& options, const Context& context);
+
+// The same from triangle labels instead of vertex incidences: `face_solids[t]` is I(T) for
+// triangle t (any order, duplicates allowed; empty = organic). Runs the §5.1 repair,
+// components and loops exactly as partition() does after its §4.2 step; stages that
+// change the mesh but carry the labels (relax/) use it to retrace the loops.
+// Throws Error{Internal} if the sizes disagree or a label is outside [0, solid_count).
+Partition partition_faces(const TriMesh& design, std::vector<std::vector<int>> face_solids,
+                          int solid_count, const PartitionOptions& options, const Context& context);
 
 }  // namespace genbrep

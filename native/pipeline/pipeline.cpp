@@ -9,7 +9,7 @@ namespace genbrep {
 const char* const kVersion = "0.1.0";
 
 const std::vector<std::string>& stage_names() {
-  static const std::vector<std::string> names{"mesh", "incidence", "partition", "field"};
+  static const std::vector<std::string> names{"mesh", "incidence", "partition", "relax", "field"};
   return names;
 }
 
@@ -82,9 +82,17 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
       result.partition = partition(*mesh, result.incidence, solids->size(), options.partition, context);
     });
   }
+  if (wanted("relax")) {
+    run_stage("relax", &result, context, [&] {
+      RelaxOptions relax_options = options.relax;
+      if (relax_options.tolerance <= 0) relax_options.tolerance = result.incidence.tolerance;
+      result.relaxed = relax(result.design, result.partition, relax_options, context);
+      mesh = std::make_unique<TriMesh>(to_trimesh(result.relaxed.design));
+    });
+  }
   if (wanted("field")) {
     run_stage("field", &result, context, [&] {
-      result.field = compute_field(*mesh, result.partition, options.field, context);
+      result.field = compute_field(*mesh, result.relaxed.partition, options.field, context);
     });
   }
   result.report_json = make_report(inputs, options, result);

@@ -14,6 +14,7 @@
 #include "incidence/incidence.h"
 #include "mesh/mesh.h"
 #include "partition/partition.h"
+#include "relax/relax.h"
 
 namespace genbrep {
 
@@ -25,6 +26,7 @@ const std::vector<std::string>& stage_names();
 struct Options {
   IncidenceOptions incidence;
   PartitionOptions partition;
+  RelaxOptions relax;  // tolerance 0 = the incidence tolerance d
   FieldOptions field;
   std::string until;  // last stage to run; empty = all
 };
@@ -44,8 +46,9 @@ struct Result {
   MeshValidation design_validation;
   std::vector<SolidInput> solids;  // prepared solids, same order as the inputs
   Incidence incidence;
-  Partition partition;
-  CrossField field;                // cross and size field on the organic region
+  Partition partition;             // of `design`
+  Relaxed relaxed;                 // §5.3: the design and partition the later stages use
+  CrossField field;                // per triangle of relaxed.design
   std::vector<std::string> stages_run;
   std::vector<StageTiming> timings;
   Diagnostics diagnostics;         // the mesh stage's notes (welds, flips)

@@ -79,6 +79,30 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     }
     report["loops"] = loops;
   }
+  if (ran(result, "relax")) {
+    const Relaxed& r = result.relaxed;
+    json relax;
+    relax["tolerance"] = r.tolerance;
+    relax["target_edge_length"] = r.target_edge_length;
+    relax["max_displacement"] = r.max_displacement;
+    relax["triangles"] = r.design.triangles.rows();
+    relax["channel_triangles"] = r.channel_triangles;
+    relax["remeshed"] = r.remeshed;
+    relax["skipped_moves"] = r.skipped_moves;
+    relax["organic_area_before"] = r.organic_area_before;
+    relax["organic_area_after"] = r.organic_area_after;
+    json loops = json::array();
+    for (const auto& loop : r.loops) {
+      loops.push_back({{"original_loop", loop.original_loop},
+                       {"edge_length_cv_before", loop.before.edge_length_cv},
+                       {"edge_length_cv_after", loop.after.edge_length_cv},
+                       {"mean_turning_degrees_before", loop.before.mean_turning_angle * 180 / M_PI},
+                       {"mean_turning_degrees_after", loop.after.mean_turning_angle * 180 / M_PI},
+                       {"max_displacement", loop.max_displacement}});
+    }
+    relax["loops"] = loops;
+    report["relax"] = relax;
+  }
   if (ran(result, "field")) {
     const CrossField& f = result.field;
     json field;
@@ -87,7 +111,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     field["tolerance_epsilon"] = f.tolerance;
     field["kappa_max"] = f.kappa_max;
     json components = json::array();
-    for (int c = 0; c < p.organic_components; ++c) {
+    for (int c = 0; c < result.relaxed.partition.organic_components; ++c) {
       int positive = 0, negative = 0, on_boundary = 0;
       for (const auto& s : f.singularities) {
         if (s.component != c) continue;
@@ -107,6 +131,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
   json diagnostics = result.diagnostics;
   for (const auto& d : result.incidence.diagnostics) diagnostics.push_back(d);
   for (const auto& d : p.diagnostics) diagnostics.push_back(d);
+  for (const auto& d : result.relaxed.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.field.diagnostics) diagnostics.push_back(d);
   report["diagnostics"] = diagnostics;
   return report.dump(2);

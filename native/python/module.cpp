@@ -76,6 +76,23 @@ py::array_t<int32_t> vector_to_array(const std::vector<int>& v) {
   return out;
 }
 
+py::dict partition_dict(const Partition& partition) {
+  py::dict p;
+  p["face_solid"] = vector_to_array(partition.face_solid);
+  p["face_component"] = vector_to_array(partition.face_component);
+  p["organic_components"] = partition.organic_components;
+  py::list loops;
+  for (const auto& loop : partition.loops) {
+    py::dict l;
+    l["vertices"] = vector_to_array(loop.vertices);
+    l["solids"] = loop.solids;
+    l["component"] = loop.component;
+    loops.append(l);
+  }
+  p["loops"] = loops;
+  return p;
+}
+
 Options to_options(const py::object& obj) {
   Options options;
   if (obj.is_none()) return options;
@@ -160,23 +177,21 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
   d["faces"] = matrix_to_array(result.design.triangles);
   d["face_source"] = vector_to_array(result.design.triangle_source);
   out["design"] = d;
-  if (!result.partition.face_solid.empty()) {
-    py::dict p;
-    p["face_solid"] = vector_to_array(result.partition.face_solid);
-    p["face_component"] = vector_to_array(result.partition.face_component);
-    p["organic_components"] = result.partition.organic_components;
-    py::list loops;
-    for (const auto& loop : result.partition.loops) {
-      py::dict l;
-      l["vertices"] = vector_to_array(loop.vertices);
-      l["solids"] = loop.solids;
-      l["component"] = loop.component;
-      loops.append(l);
-    }
-    p["loops"] = loops;
-    out["partition"] = p;
+  if (ran(result, "partition")) {
+    out["partition"] = partition_dict(result.partition);
   } else {
     out["partition"] = py::none();
+  }
+  if (ran(result, "relax")) {
+    const Relaxed& r = result.relaxed;
+    py::dict relaxed;
+    relaxed["vertices"] = matrix_to_array(r.design.vertices);
+    relaxed["faces"] = matrix_to_array(r.design.triangles);
+    relaxed["face_source"] = vector_to_array(r.design.triangle_source);
+    relaxed["partition"] = partition_dict(r.partition);
+    out["relaxed"] = relaxed;
+  } else {
+    out["relaxed"] = py::none();
   }
   if (ran(result, "field")) {
     const CrossField& f = result.field;

@@ -18,7 +18,9 @@ genbrep.register()
 from genbrep import operators  # noqa: E402
 
 COLLECTION = "genbrep design"
-_step = iter(range(100))
+_state = {"step": 0, "waited": 0.0}
+POLL = 0.25      # seconds between checks while the worker runs
+PATIENCE = 120   # seconds to wait for the first conversion before giving up
 
 
 def _context():
@@ -34,13 +36,19 @@ def _say(check, value):
 
 def step():
     window, override = _context()
-    index = next(_step)
+    index = _state["step"]
+    _state["step"] += 1
     if index == 0:
         bpy.ops.ed.undo_push(message="before convert")
         with bpy.context.temp_override(**override):
             _say("invoke", sorted(bpy.ops.genbrep.convert("INVOKE_DEFAULT")))
-        return 1.0
+        return POLL
     if index == 1:
+        # Wait for the worker: the modal timer writes the results when it is done.
+        if operators._running and _state["waited"] < PATIENCE:
+            _state["step"] = 1
+            _state["waited"] += POLL
+            return POLL
         _say("converted", COLLECTION in bpy.data.collections)
         with bpy.context.temp_override(**override):
             bpy.ops.ed.undo()

@@ -11,7 +11,7 @@ SCENES = ["grown_box", "tube", "two_arches", "eroded_seed", "bolt_hole"]
 
 def test_module_describes_itself(native):
     assert native.__version__.count(".") == 2
-    assert native.STAGES[:4] == ("mesh", "incidence", "partition", "field")
+    assert native.STAGES[:5] == ("mesh", "incidence", "partition", "relax", "field")
     assert "tolerance" in native.OPTION_KEYS and "size_scale" in native.OPTION_KEYS
     assert issubclass(native.CancelledError, native.ConversionError)
 
@@ -42,9 +42,16 @@ def test_partition_of_each_scene(native, scenes, scene, mode):
     assert report["counts"]["boundary_loops"] == loops
     assert report["tolerance"]["mode"] == mode
     assert tuple(report["stages"]) == native.STAGES
-    # Field: one unit direction per organic face; indices sum to 4χ per component.
+    # Relaxation keeps the components and loops, on a remeshed design.
+    relaxed = result["relaxed"]
+    assert relaxed["partition"]["organic_components"] == components
+    assert len(relaxed["partition"]["loops"]) == loops
+    assert relaxed["partition"]["face_solid"].shape == (len(relaxed["faces"]),)
+    for loop in report["relax"]["loops"]:
+        assert loop["mean_turning_degrees_after"] < loop["mean_turning_degrees_before"]
+    # Field, on the relaxed design: one unit direction per organic face; indices sum to 4χ.
     field = result["field"]
-    organic = part["face_solid"] == -1
+    organic = relaxed["partition"]["face_solid"] == -1
     assert np.allclose(np.linalg.norm(field["direction"][organic], axis=1), 1.0)
     assert np.all(field["size_u"][organic] > 0)
     chi = {"grown_box": 1, "tube": 0, "two_arches": 0, "eroded_seed": 1, "bolt_hole": 1}[scene]
