@@ -6,7 +6,9 @@ import bpy, sys, math
 argv = sys.argv[sys.argv.index("--") + 1:]
 folder, out = argv[0], argv[1]
 bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_mesh.ply(filepath=folder + "/partition.ply")
+import os
+ply = folder + ("/relaxed.ply" if os.path.exists(folder + "/relaxed.ply") else "/partition.ply")
+bpy.ops.import_mesh.ply(filepath=ply)
 part = bpy.context.selected_objects[0]
 bpy.ops.import_scene.obj(filepath=folder + "/field.obj", split_mode="OFF", axis_forward="Y", axis_up="Z")
 field = bpy.context.selected_objects[0]
