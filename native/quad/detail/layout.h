@@ -1,0 +1,121 @@
+// quad/detail/layout.h — internals of quad/: the surface view of one organic component,
+// field-guided tracing along mesh edges, the patch layout and its filling.
+#pragma once
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "core/cage.h"
+#include "core/error.h"
+#include "core/types.h"
+#include "field/field.h"
+#include "partition/partition.h"
+#include "quad/quad.h"
+
+namespace genbrep::quad_detail {
+
+// Read-only geometry of one organic component with the field on it.
+struct Surface {
+  Surface(const TriMesh& mesh, const Partition& partition, const CrossField& field,
+          int component);
+  const TriMesh& mesh;
+  const Partition& partition;
+  const CrossField& field;
+  int component;
+  std::vector<Vec3> point;          // per vertex
+  std::vector<Vec3> face_normal;    // per face (unit)
+  std::vector<Vec3> vertex_normal;  // per vertex, from the component's faces only
+  std::vector<double> vertex_size;  // mean target edge length of the component faces around
+  std::vector<int> vertices;        // vertices touched by the component's faces
+  bool in(int face) const { return face >= 0 && partition.face_component[face] == component; }
+  // Face of the halfedge (-1 at a mesh border).
+  int face(int halfedge) const;
+  int from(int halfedge) const;
+  int to(int halfedge) const;
+  int opposite(int halfedge) const { return halfedge ^ 1; }
+  // Next outgoing halfedge counter-clockwise around from(h): the face between them is face(h).
+  int ccw(int halfedge) const;
+  double corner_angle(int halfedge) const;  // angle at from(h) inside face(h)
+  // The cross direction of `face` closest to `d` (one of its four rotations).
+  Vec3 snap(int face, const Vec3& d) const;
+  // Target edge length along direction d on `face` (size_u or size_v, whichever arm d follows).
+  double size_along(int face, const Vec3& d) const;
+  Vec3 tangent(int vertex, const Vec3& d) const;  // d projected into the vertex tangent plane
+};
+
+// Layout curves: the component's loops first (closed), then traced separatrices (open,
+// from a start node to the vertex where they hit the layout).
+struct Curve {
+  std::vector<int> vertices;
+  std::vector<Vec3> direction;  // per vertex: unit tangent along the curve
+  bool closed = false;
+  int loop = -1;                // partition loop index for loops
+};
+
+struct Layout {
+  std::vector<Curve> curves;
+  std::vector<int> edge_curve;       // per mesh edge: curve on it, -1 none
+  std::vector<char> claimed;         // per vertex: on a curve
+  std::vector<char> node;            // per vertex: layout node
+  std::vector<Vec3> halfedge_dir;    // per halfedge on a curve: tangent at from(h) along h
+  std::vector<char> on_loop;         // per vertex: on a boundary loop
+  bool allow_crossing = false;      // separatrices (not repair cuts) cross transversally
+  double length_cap = 0;             // traces cross others only before this length
+  std::vector<int> attractors;       // traced singular vertices (separatrices end on them)
+  int separatrices = 0;
+  int cancelled_pairs = 0;
+  int dropped_traces = 0;
+};
+
+// Starts a layout from the component's loops (nodes at boundary singularities).
+Layout start_layout(const Surface& s, const Diagnostics& diagnostics);
+// Marks curve c on the edge/halfedge tables (after its vertices and directions are set).
+void register_curve(const Surface& s, Layout& layout, int c);
+// Traces from `vertex` into the sector from outgoing halfedge `first` counter-clockwise to
+// `last` (first == last: the whole fan), towards polar angle `fraction` of the sector,
+// snapped to the nearest field direction. Returns false (and traces nothing) when no edge
+// leaves into the sector. Stops at the first claimed vertex (motorcycle graph).
+bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int last,
+                double fraction, bool snap_to_field);
+// Separatrices of every interior singularity and concave boundary corner.
+void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& options,
+                        Diagnostics& diagnostics);
+
+struct Arc {
+  std::vector<int> vertices;  // node to node along a curve
+  int curve = -1;
+  double length = 0;
+  double target = 0;          // length / local size
+  int count = 1;              // quantized number of cage edges
+};
+
+struct Patch {
+  std::vector<int> faces;
+  // Four sides counter-clockwise (patch on the left); each a list of (arc, reversed).
+  std::vector<std::vector<std::pair<int, bool>>> sides;
+};
+
+struct PatchLayout {
+  std::vector<Arc> arcs;
+  std::vector<int> halfedge_arc;       // per halfedge on an arc: arc id, -1 none
+  std::vector<Patch> patches;
+  std::vector<std::vector<int>> loop_arcs;  // per curve that is a loop: its arcs in order
+  int recornered = 0;
+};
+
+// Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
+// disks with extra traces. Throws Error{StageFailure} if some patch stays invalid.
+PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
+                          Diagnostics& diagnostics);
+
+// Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
+// min-cost flow (quantize.cpp); false with the reason in `failure` if none exists.
+// `fixed_arcs`: arcs closing a twisted cycle, held at their rounded length (reported).
+bool quantize(PatchLayout& patches, const QuadOptions& options, int* fixed_arcs,
+              std::string* failure);
+
+// Cage from the quantized layout.
+QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& patches,
+                      Diagnostics& diagnostics);
+
+}  // namespace genbrep::quad_detail

@@ -1,0 +1,343 @@
+// quad/layout.cpp — from layout curves to arcs and four-sided patches (quad/quad.h step 1).
+// Corners are read where the patch boundary turns at a layout node: the angle between the
+// curves' tangents (field directions for separatrices, chord tangents for loops) rounded
+// to quarter turns q; a valid patch is a disk whose boundary turns Σ(2 − q) = 4 with no
+// reflex (q = 3) node. Invalid patches are cut by more traces (a dangling separatrix is
+// continued, a reflex node continues its incoming curve, a non-disk is cut from the middle
+// of its longest arc); a wrong corner count is fixed by re-reading the most ambiguous angle.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "quad/detail/layout.h"
+
+namespace genbrep::quad_detail {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+// Counter-clockwise angle in (0, 2π] from a to b in the tangent plane of normal n.
+double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
+  double angle = std::atan2(n.dot(a.cross(b)), a.dot(b));
+  if (angle <= 1e-9) angle += 2 * kPi;
+  return angle;
+}
+
+struct Corner {
+  int halfedge_out;  // patch boundary halfedge leaving the node
+  int halfedge_in;   // patch boundary halfedge entering it
+  double angle;
+  int quarters;
+};
+
+struct Cycle {
+  std::vector<int> halfedges;  // patch on the left, in order
+  std::vector<Corner> nodes;   // nodes met along the cycle, in order
+};
+
+void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
+  const int n_curves = static_cast<int>(layout.curves.size());
+  std::vector<int> degree(s.mesh.n_vertices(), 0);
+  for (int e = 0; e < static_cast<int>(layout.edge_curve.size()); ++e)
+    if (layout.edge_curve[e] >= 0) {
+      const auto h = s.mesh.halfedge_handle(s.mesh.edge_handle(e), 0);
+      ++degree[s.mesh.from_vertex_handle(h).idx()];
+      ++degree[s.mesh.to_vertex_handle(h).idx()];
+    }
+  for (int v : s.vertices)
+    if (layout.claimed[v] && degree[v] != 2) layout.node[v] = 1;
+  out.arcs.clear();
+  out.halfedge_arc.assign(s.mesh.n_halfedges(), -1);
+  out.loop_arcs.assign(n_curves, {});
+  for (int c = 0; c < n_curves; ++c) {
+    const Curve& curve = layout.curves[c];
+    std::vector<int> vs = curve.vertices;
+    if (curve.closed) {
+      auto it = std::find_if(vs.begin(), vs.end(), [&](int v) { return layout.node[v] != 0; });
+      if (it == vs.end()) layout.node[vs.front()] = 1, it = vs.begin();
+      std::rotate(vs.begin(), it, vs.end());
+      vs.push_back(vs.front());
+    }
+    Arc arc;
+    arc.curve = c;
+    arc.vertices.push_back(vs.front());
+    for (size_t i = 1; i < vs.size(); ++i) {
+      const int a = vs[i - 1], b = vs[i];
+      const auto h = s.mesh.find_halfedge(s.mesh.vertex_handle(a), s.mesh.vertex_handle(b));
+      const int id = static_cast<int>(out.arcs.size());
+      out.halfedge_arc[h.idx()] = 2 * id;          // even: along the arc
+      out.halfedge_arc[h.idx() ^ 1] = 2 * id + 1;  // odd: against it
+      const Vec3 e = s.point[b] - s.point[a];
+      int f = s.face(h.idx());
+      if (!s.in(f)) f = s.face(h.idx() ^ 1);
+      arc.length += e.norm();
+      arc.target += e.norm() / s.size_along(f, e);
+      arc.vertices.push_back(b);
+      if (layout.node[b] || i + 1 == vs.size()) {
+        if (curve.closed) out.loop_arcs[c].push_back(id);
+        out.arcs.push_back(arc);
+        arc = Arc();
+        arc.curve = c;
+        arc.vertices.push_back(b);
+      }
+    }
+  }
+}
+
+// The next patch-boundary halfedge after h: rotate around to(h) inside the patch.
+int next_on_boundary(const Surface& s, const Layout& layout, int h) {
+  int c = s.mesh.next_halfedge_handle(s.mesh.halfedge_handle(h)).idx();
+  for (int guard = 0; layout.edge_curve[c >> 1] < 0 && guard < 256; ++guard)
+    c = s.mesh.next_halfedge_handle(s.mesh.halfedge_handle(c ^ 1)).idx();
+  return c;
+}
+
+}  // namespace
+
+PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
+                          Diagnostics& diagnostics) {
+  const std::string who = "component " + std::to_string(s.component);
+  std::map<int, int> quarter_override;  // by the sector's outgoing halfedge
+  PatchLayout out;
+  for (int round = 0;; ++round) {
+    build_arcs(s, layout, out);
+    // Flood fill the component's faces across edges no curve runs along.
+    const int nf = static_cast<int>(s.mesh.n_faces());
+    std::vector<int> patch_of(nf, -1);
+    std::vector<std::vector<int>> patch_faces;
+    for (int f0 = 0; f0 < nf; ++f0) {
+      if (!s.in(f0) || patch_of[f0] >= 0) continue;
+      const int p = static_cast<int>(patch_faces.size());
+      patch_faces.push_back({f0});
+      patch_of[f0] = p;
+      for (size_t k = 0; k < patch_faces[p].size(); ++k)
+        for (auto h : s.mesh.fh_range(s.mesh.face_handle(patch_faces[p][k]))) {
+          if (layout.edge_curve[h.idx() >> 1] >= 0) continue;
+          const int g = s.face(h.idx() ^ 1);
+          if (g >= 0 && s.in(g) && patch_of[g] < 0) patch_of[g] = p, patch_faces[p].push_back(g);
+        }
+    }
+    out.patches.clear();
+    // A fix is a list of places to cut from, tried in order; if none can be traced, a
+    // reflex reading is overridden to straight instead (and reported).
+    struct Cut { int vertex, first, last; double fraction; };
+    struct Fix {
+      std::vector<Cut> cuts;
+      int override_halfedge = -1;
+      std::vector<std::pair<int, int>> forced;  // last resort: (halfedge_out, quarters)
+      std::vector<int> forced_nodes;
+    };
+    // Last resort for a disk: its four sharpest boundary turns become the corners.
+    auto force_corners = [&](const Cycle& c, Fix& fix) {
+      const int n = static_cast<int>(c.halfedges.size());
+      if (n < 4) return;
+      std::vector<std::pair<double, int>> turns;
+      for (int i = 0; i < n; ++i) {
+        const int h_out = c.halfedges[i], h_in = c.halfedges[(i + n - 1) % n];
+        turns.push_back({ccw_angle(layout.halfedge_dir[h_out], layout.halfedge_dir[h_in ^ 1],
+                                   s.vertex_normal[s.from(h_out)]), i});
+      }
+      std::stable_sort(turns.begin(), turns.end());
+      std::vector<char> corner(n, 0);
+      for (int k = 0; k < 4; ++k) corner[turns[k].second] = 1;
+      for (int i = 0; i < n; ++i) {
+        const int v = s.from(c.halfedges[i]);
+        if (corner[i] && !layout.node[v]) fix.forced_nodes.push_back(v);
+        if (corner[i] || layout.node[v]) fix.forced.push_back({c.halfedges[i], corner[i] ? 1 : 2});
+      }
+    };
+    std::vector<Fix> fixes;
+    // Cuts from the non-node vertices of the cycles, the farthest from any node first.
+    auto middle_cuts = [&](const std::vector<Cycle>& cycles) {
+      std::vector<std::pair<int, Cut>> ranked;
+      for (const Cycle& c : cycles) {
+        const int n = static_cast<int>(c.halfedges.size());
+        std::vector<int> gap(n, n);
+        for (int pass = 0; pass < 2; ++pass)
+          for (int t = 0; t < 2 * n; ++t) {
+            const int i = pass == 0 ? t % n : (2 * n - 1 - t) % n;
+            const int j = pass == 0 ? (i + n - 1) % n : (i + 1) % n;
+            if (layout.node[s.from(c.halfedges[i])]) gap[i] = 0;
+            else gap[i] = std::min(gap[i], gap[j] + 1);
+          }
+        for (int i = 0; i < n; ++i)
+          ranked.push_back({-gap[i], Cut{s.from(c.halfedges[i]), c.halfedges[i],
+                                         c.halfedges[(i + n - 1) % n] ^ 1, 0.5}});
+      }
+      std::stable_sort(ranked.begin(), ranked.end(),
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+      Fix fix;
+      for (size_t k = 0; k < ranked.size() && k < 24; ++k) fix.cuts.push_back(ranked[k].second);
+      return fix;
+    };
+    for (int p = 0; p < static_cast<int>(patch_faces.size()); ++p) {
+      // Boundary cycles and the Euler characteristic of the patch.
+      std::vector<int> boundary;
+      std::vector<int> verts, edges;
+      for (int f : patch_faces[p])
+        for (auto h : s.mesh.fh_range(s.mesh.face_handle(f))) {
+          edges.push_back(h.idx() >> 1);
+          verts.push_back(s.from(h.idx()));
+          if (layout.edge_curve[h.idx() >> 1] >= 0) boundary.push_back(h.idx());
+        }
+      std::sort(verts.begin(), verts.end());
+      std::sort(edges.begin(), edges.end());
+      const long chi = long(std::unique(verts.begin(), verts.end()) - verts.begin()) -
+                       long(std::unique(edges.begin(), edges.end()) - edges.begin()) +
+                       long(patch_faces[p].size());
+      std::sort(boundary.begin(), boundary.end());
+      std::vector<char> used(boundary.size(), 0);
+      std::vector<Cycle> cycles;
+      for (size_t b = 0; b < boundary.size(); ++b) {
+        if (used[b]) continue;
+        Cycle cycle;
+        int h = boundary[b];
+        for (size_t guard = 0; guard <= boundary.size(); ++guard) {
+          const size_t at = std::lower_bound(boundary.begin(), boundary.end(), h) - boundary.begin();
+          if (at >= boundary.size() || boundary[at] != h || used[at]) break;
+          used[at] = 1;
+          cycle.halfedges.push_back(h);
+          h = next_on_boundary(s, layout, h);
+        }
+        const int n = static_cast<int>(cycle.halfedges.size());
+        for (int i = 0; i < n; ++i) {
+          const int h_out = cycle.halfedges[i], h_in = cycle.halfedges[(i + n - 1) % n];
+          const int v = s.from(h_out);
+          if (!layout.node[v]) continue;
+          Corner corner{h_out, h_in, 0, 2};
+          corner.angle = ccw_angle(layout.halfedge_dir[h_out], layout.halfedge_dir[h_in ^ 1],
+                                   s.vertex_normal[v]);
+          corner.quarters = std::clamp(int(std::lround(corner.angle / (kPi / 2))), 1, 3);
+          if (h_out == (h_in ^ 1)) corner.quarters = 4;  // a dangling end: full turn
+          auto o = quarter_override.find(h_out);
+          if (o != quarter_override.end()) corner.quarters = o->second;
+          cycle.nodes.push_back(corner);
+        }
+        cycles.push_back(cycle);
+      }
+      // Validity and, if invalid, the fix this round.
+      bool repeated = false;
+      if (cycles.size() == 1) {
+        std::vector<int> cv;
+        for (int h : cycles[0].halfedges) cv.push_back(s.from(h));
+        std::sort(cv.begin(), cv.end());
+        repeated = std::adjacent_find(cv.begin(), cv.end()) != cv.end();
+      }
+      const Corner* dangling = nullptr;
+      const Corner* reflex = nullptr;
+      for (const Cycle& c : cycles)
+        for (const Corner& k : c.nodes) {
+          if (k.quarters == 4 && !dangling) dangling = &k;
+          if (k.quarters == 3 && !reflex) reflex = &k;
+        }
+      if (dangling) {
+        Fix fix;
+        fix.cuts.push_back({s.from(dangling->halfedge_out), dangling->halfedge_out,
+                            dangling->halfedge_out, 0.5});
+        fixes.push_back(fix);
+        continue;
+      }
+      if (cycles.size() != 1 || chi != 1 || repeated) {
+        if (cycles.empty()) {  // no boundary at all (a closed component without curves)
+          const int h = s.mesh.halfedge_handle(s.mesh.face_handle(patch_faces[p][0])).idx();
+          Fix fix;
+          fix.cuts.push_back({s.from(h), h, h, 0.5});
+          fixes.push_back(fix);
+        } else {
+          fixes.push_back(middle_cuts(cycles));
+        }
+        continue;
+      }
+      if (reflex) {
+        Fix fix;
+        fix.cuts.push_back({s.from(reflex->halfedge_out), reflex->halfedge_out,
+                            reflex->halfedge_in ^ 1, 1.0 / 3});
+        fix.cuts.push_back({s.from(reflex->halfedge_out), reflex->halfedge_out,
+                            reflex->halfedge_in ^ 1, 2.0 / 3});
+        fix.override_halfedge = reflex->halfedge_out;
+        fixes.push_back(fix);
+        continue;
+      }
+      Cycle& cycle = cycles[0];
+      int turning = 0;
+      for (const Corner& k : cycle.nodes) turning += 2 - k.quarters;
+      if (turning != 4) {
+        // Re-read the most ambiguous angle: a corner nearest to straight, or the reverse.
+        Corner* pick = nullptr;
+        for (Corner& k : cycle.nodes) {
+          if (turning > 4 && k.quarters == 1 && (!pick || k.angle > pick->angle)) pick = &k;
+          if (turning < 4 && k.quarters == 2 && (!pick || k.angle < pick->angle)) pick = &k;
+        }
+        if (!pick || std::abs(turning - 4) > 2) {
+          fixes.push_back(middle_cuts(cycles));
+          force_corners(cycle, fixes.back());
+          continue;
+        }
+        quarter_override[pick->halfedge_out] = turning > 4 ? 2 : 1;
+        ++out.recornered;
+        --p;  // re-examine the same patch with the new reading
+        continue;
+      }
+      // Valid: split the cycle into four sides at its corners.
+      Patch patch;
+      patch.faces = patch_faces[p];
+      std::vector<int> corner_at;
+      const int n = static_cast<int>(cycle.halfedges.size());
+      std::vector<int> quarters(n, 2);
+      std::vector<char> is_node(n, 0);
+      for (int i = 0; i < n; ++i) is_node[i] = layout.node[s.from(cycle.halfedges[i])];
+      {
+        size_t k = 0;
+        for (int i = 0; i < n; ++i)
+          if (is_node[i]) quarters[i] = cycle.nodes[k++].quarters;
+      }
+      int start = 0;
+      while (quarters[start] != 1) ++start;
+      patch.sides.assign(4, {});
+      int side = -1;
+      for (int t = 0; t < n; ++t) {
+        const int i = (start + t) % n;
+        if (quarters[i] == 1) ++side;
+        if (is_node[i]) {
+          const int code = out.halfedge_arc[cycle.halfedges[i]];
+          patch.sides[side].push_back({code / 2, (code & 1) != 0});
+        }
+      }
+      out.patches.push_back(patch);
+    }
+    if (fixes.empty()) break;
+    GENBREP_CHECK(round < options.max_fix_rounds, Code::StageFailure,
+                  "quad: " + who + ": " + std::to_string(fixes.size()) +
+                      " patches are still not four-sided disks after " +
+                      std::to_string(round) + " rounds of extra cuts");
+    int traced = 0;
+    for (const Fix& fix : fixes) {
+      bool done = false;
+      for (int pass = 0; pass < 2 && !done; ++pass)  // field-aligned first, then straight
+        for (const Cut& cut : fix.cuts)
+          if (trace_from(s, layout, cut.vertex, cut.first, cut.last, cut.fraction, pass == 0)) {
+            done = true;
+            break;
+          }
+      if (!done && !fix.forced.empty()) {
+        for (int v : fix.forced_nodes) layout.node[v] = 1;
+        for (auto& [h, q] : fix.forced) quarter_override[h] = q;
+        ++out.recornered;
+        done = true;
+      }
+      if (!done && fix.override_halfedge >= 0) {
+        quarter_override[fix.override_halfedge] = 2;
+        ++out.recornered;
+        done = true;
+      }
+      traced += done;
+    }
+    GENBREP_CHECK(traced > 0, Code::StageFailure,
+                  "quad: " + who + ": no extra cut could be traced into an invalid patch");
+  }
+  if (out.recornered)
+    diagnostics.push_back(who + ": " + std::to_string(out.recornered) +
+                          " patch corners re-read to make four-sided patches");
+  return out;
+}
+
+}  // namespace genbrep::quad_detail

@@ -1,0 +1,182 @@
+// quad/quad.cpp — extract_cages: layout, quantization and filling per organic component,
+// and the cage statistics (quad/quad.h).
+#include "quad/quad.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "quad/detail/layout.h"
+
+namespace genbrep {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
+  QuadStats stats;
+  stats.quads = static_cast<int>(cage.quads.rows());
+  stats.vertices = static_cast<int>(cage.vertices.rows());
+  std::map<std::pair<int, int>, int> edge_use;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      ++edge_use[{std::min(a, b), std::max(a, b)}];
+    }
+  std::vector<int> valence(stats.vertices, 0);
+  std::vector<char> boundary(stats.vertices, 0);
+  for (const auto& [edge, uses] : edge_use) {
+    ++valence[edge.first];
+    ++valence[edge.second];
+    if (uses == 1) boundary[edge.first] = boundary[edge.second] = 1;
+  }
+  for (int v = 0; v < stats.vertices; ++v) {
+    if (!valence[v]) continue;
+    if (boundary[v]) {
+      ++stats.boundary_vertices;
+      stats.boundary_valence3 += valence[v] == 3;
+    } else {
+      ++stats.interior_vertices;
+      stats.interior_valence4 += valence[v] == 4;
+    }
+  }
+  stats.irregular_vertices = (stats.interior_vertices - stats.interior_valence4) +
+                             (stats.boundary_vertices - stats.boundary_valence3);
+  // Design vertex normals (area-weighted) and a coarse hash grid for nearest vertices.
+  const int nv = static_cast<int>(design.n_vertices());
+  std::vector<Vec3> point(nv), normal(nv, Vec3::Zero());
+  for (int v = 0; v < nv; ++v) {
+    const auto& p = design.point(design.vertex_handle(v));
+    point[v] = Vec3(p[0], p[1], p[2]);
+  }
+  for (auto f : design.faces()) {
+    int c[3], k = 0;
+    for (auto v : design.fv_range(f)) c[k++] = v.idx();
+    const Vec3 n = (point[c[1]] - point[c[0]]).cross(point[c[2]] - point[c[0]]);
+    for (int v : c) normal[v] += n;
+  }
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  for (const Vec3& p : point) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const double cell = std::max((hi - lo).maxCoeff() / 64, 1e-12);
+  std::map<std::array<long, 3>, std::vector<int>> buckets;
+  auto key = [&](const Vec3& p) {
+    const Vec3 r = (p - lo) / cell;
+    return std::array<long, 3>{long(std::floor(r.x())), long(std::floor(r.y())), long(std::floor(r.z()))};
+  };
+  for (int v = 0; v < nv; ++v) buckets[key(point[v])].push_back(v);
+  auto nearest = [&](const Vec3& p) {
+    const auto k = key(p);
+    int best = -1;
+    double best_d = 1e300;
+    for (int radius = 1; best < 0 && radius < 70; radius *= 2)
+      for (long x = k[0] - radius; x <= k[0] + radius; ++x)
+        for (long y = k[1] - radius; y <= k[1] + radius; ++y)
+          for (long z = k[2] - radius; z <= k[2] + radius; ++z) {
+            auto it = buckets.find({x, y, z});
+            if (it == buckets.end()) continue;
+            for (int v : it->second) {
+              const double d = (point[v] - p).squaredNorm();
+              if (d < best_d) best_d = d, best = v;
+            }
+          }
+    return best;
+  };
+  double angle_sum = 0;
+  int corners = 0;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    Vec3 c[4];
+    bool repeated = false;
+    for (int k = 0; k < 4; ++k) {
+      c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+      for (int j = 0; j < k; ++j) repeated |= cage.quads(q, k) == cage.quads(q, j);
+    }
+    bool degenerate = repeated;
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
+      const double angle = std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi;
+      degenerate |= angle < 1 || a.norm() == 0 || b.norm() == 0;
+      const double deviation = std::abs(angle - 90);
+      angle_sum += deviation;
+      stats.max_angle_deviation_deg = std::max(stats.max_angle_deviation_deg, deviation);
+      ++corners;
+    }
+    stats.degenerate_quads += degenerate;
+    const Vec3 quad_normal = (c[2] - c[0]).cross(c[3] - c[1]);
+    const int v = nearest(0.25 * (c[0] + c[1] + c[2] + c[3]));
+    if (v >= 0 && quad_normal.dot(normal[v]) <= 0) ++stats.flipped_quads;
+  }
+  stats.mean_angle_deviation_deg = corners ? angle_sum / corners : 0;
+  return stats;
+}
+
+namespace {
+void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
+                       const QuadOptions& options, int c, QuadResult* out);
+}  // namespace
+
+QuadResult extract_cages(const TriMesh& design, const Partition& partition,
+                         const CrossField& field, const QuadOptions& options,
+                         const Context& context) {
+  GENBREP_CHECK(partition.face_component.size() == design.n_faces() &&
+                    field.direction.rows() == static_cast<Eigen::Index>(design.n_faces()),
+                Code::InvalidInput, "quad: the partition or field does not match the design (" +
+                    std::to_string(design.n_faces()) + " triangles)");
+  GENBREP_CHECK(options.density > 0, Code::InvalidInput, "quad: density must be positive");
+  QuadResult result;
+  for (int c = 0; c < partition.organic_components; ++c) {
+    context.step("quad", double(c) / std::max(1, partition.organic_components));
+    try {
+      extract_component(design, partition, field, options, c, &result);
+    } catch (const Error& e) {
+      if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
+      result.failures.push_back({c, e.what()});
+      result.diagnostics.push_back("component " + std::to_string(c) + ": no cage: " + e.what());
+    }
+  }
+  context.step("quad", 1.0);
+  return result;
+}
+
+namespace {
+
+// One component: layout, quantization, filling. Throws Error{StageFailure} when the
+// layout cannot be quantized or the filled cage is invalid.
+void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
+                       const QuadOptions& options, int c, QuadResult* out) {
+  QuadResult& result = *out;
+  {
+    const auto start = std::chrono::steady_clock::now();
+    const quad_detail::Surface surface(design, partition, field, c);
+    quad_detail::Layout layout = quad_detail::start_layout(surface, result.diagnostics);
+    quad_detail::trace_separatrices(surface, layout, options, result.diagnostics);
+    quad_detail::PatchLayout patches =
+        quad_detail::build_patches(surface, layout, options, result.diagnostics);
+    std::string failure;
+    int fixed_arcs = 0;
+    GENBREP_CHECK(quad_detail::quantize(patches, options, &fixed_arcs, &failure), Code::StageFailure,
+                  "quad: component " + std::to_string(c) + ": quantization of " +
+                      std::to_string(patches.patches.size()) + " patches: " + failure);
+    if (fixed_arcs)
+      result.diagnostics.push_back("component " + std::to_string(c) + ": " +
+                                   std::to_string(fixed_arcs) +
+                                   " arcs on twisted side cycles kept at their rounded length");
+    QuadCage cage = quad_detail::fill_patches(surface, layout, patches, result.diagnostics);
+    QuadStats stats = measure_cage(cage, design);
+    stats.patches = static_cast<int>(patches.patches.size());
+    stats.separatrices = layout.separatrices;
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (layout.dropped_traces)
+      result.diagnostics.push_back("component " + std::to_string(c) + ": " +
+                                   std::to_string(layout.dropped_traces) + " traces dropped");
+    GENBREP_CHECK(stats.flipped_quads == 0 && stats.degenerate_quads == 0, Code::StageFailure,
+                  "the cage has " + std::to_string(stats.flipped_quads) + " flipped and " +
+                      std::to_string(stats.degenerate_quads) + " degenerate quads");
+    result.cages.push_back(std::move(cage));
+    result.stats.push_back(stats);
+  }
+}
+
+}  // namespace
+
+}  // namespace genbrep

@@ -1,0 +1,107 @@
+// quad/quad.h — a pure-quad control cage per organic component (paper §6, "quad partition
+// of Ω"), by a quantized patch layout instead of the paper's integer-grid map
+// (docs/quad_method.md says why and what it measures).
+// Takes: the design's halfedge mesh (closed, 2-manifold, outward-oriented), its Partition
+// (organic components, boundary loops with the organic side on the left) and the
+// CrossField of field/ (per-face 4-RoSy direction, size_u/size_v, singularities).
+// Method, per component:
+//   1. layout: separatrices leave every interior singularity (one per sector of its cross)
+//      and every concave boundary corner, follow the field along mesh edges and stop where
+//      they meet a loop or an earlier separatrix (a motorcycle graph: separatrices can
+//      only meet at mesh vertices, so the graph is embedded by construction). ± pairs of
+//      singularities closer than `pair_cancel_distance` are not traced (they cancel).
+//      Patches that are not topological disks with four corners get extra field-aligned
+//      cuts from their boundary; corners are read from the angles between the curves.
+//   2. quantization: every layout arc gets an integer count ≥ 1 near length / size; the
+//      two pairs of opposite sides of every patch get equal sums (exact min-cost flow).
+//   3. filling: every patch is mapped to its integer rectangle (Tutte map with the sides
+//      sampled by arc length) and the grid's points are lifted back to the surface.
+// Gives: one QuadCage per organic component, in component order, with vertices on the
+// design, quads counter-clockwise seen from outside, one boundary chain per loop of the
+// component (chain_loop = the partition loop index), and per-cage statistics and
+// diagnostics.
+// Guarantees: only quads; the cage is manifold by construction (patches are disks, shared
+// arcs share their samples); every loop is one closed chain whose vertices lie on the
+// loop's polyline. What could not be built as intended (a patch that stayed non-disk,
+// quantization that did not converge, re-classified corners) is reported in diagnostics
+// and counted in the statistics, never silent; a component whose layout cannot be made
+// valid throws Error{StageFailure} naming it.
+// Deterministic. Complexity: O(F log F) for the layout and one sparse factorisation per
+// patch (Tutte map) for the filling; point location O(P·T_patch) per patch.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/cage.h"
+#include "core/context.h"
+#include "core/error.h"
+#include "core/types.h"
+#include "field/field.h"
+#include "partition/partition.h"
+
+namespace genbrep {
+
+struct QuadOptions {
+  // Singularities of opposite sign closer than this times the local target edge length
+  // (mean of size_u, size_v) are a cancelling pair and are not traced (dimensionless).
+  double pair_cancel_distance = 1.0;
+  // Singularities closer than this times the local target edge length to a boundary loop
+  // are left to the boundary (not traced): see trace_separatrices (dimensionless).
+  double boundary_absorb_distance = 0.75;
+  // Let separatrices pass transversally through earlier ones (fewer T-junctions, but
+  // edge-snapped crossings leave sliver patches on level-set meshes: off by default).
+  bool cross_separatrices = false;
+  // Rounds of extra cuts for patches that are not disks with four corners.
+  int max_fix_rounds = 64;
+  // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
+  double density = 1.0;
+};
+
+// Quality of one cage, measured on the cage itself (what report.json shows).
+struct QuadStats {
+  int quads = 0;
+  int vertices = 0;
+  int interior_vertices = 0;
+  int interior_valence4 = 0;
+  int boundary_vertices = 0;
+  int boundary_valence3 = 0;   // valence counts edges: 3 = one edge into the interior
+  int irregular_vertices = 0;  // interior ≠ 4 plus boundary ≠ 3
+  double mean_angle_deviation_deg = 0;  // mean |corner angle − 90°| over all quad corners
+  double max_angle_deviation_deg = 0;
+  int flipped_quads = 0;  // quad normal · design normal at its closest design vertex < 0
+  int degenerate_quads = 0;  // a corner angle below 1° or a repeated corner
+  int patches = 0;
+  int separatrices = 0;
+  double seconds = 0;
+  double interior_valence4_fraction() const {
+    return interior_vertices ? double(interior_valence4) / interior_vertices : 1.0;
+  }
+  double boundary_valence3_fraction() const {
+    return boundary_vertices ? double(boundary_valence3) / boundary_vertices : 1.0;
+  }
+};
+
+struct QuadFailure {
+  int component = -1;
+  std::string reason;  // why no cage: the layout or quantization failed, or the cage was invalid
+};
+
+struct QuadResult {
+  // One valid cage per organic component that could be meshed (cages[i].component says
+  // which); a component whose layout fails, or whose cage has flipped or degenerate quads,
+  // gets no cage and a QuadFailure instead: never an invalid cage, never a silent gap.
+  std::vector<QuadCage> cages;
+  std::vector<QuadStats> stats;  // same order as cages
+  std::vector<QuadFailure> failures;
+  Diagnostics diagnostics;       // "component 2: 3 patches re-cornered", ...
+};
+
+QuadResult extract_cages(const TriMesh& design, const Partition& partition,
+                         const CrossField& field, const QuadOptions& options,
+                         const Context& context);
+
+// The statistics of any cage against the design it approximates (used by extract_cages;
+// public so the pipeline and tests can measure other cages the same way).
+QuadStats measure_cage(const QuadCage& cage, const TriMesh& design);
+
+}  // namespace genbrep

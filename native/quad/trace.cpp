@@ -1,0 +1,472 @@
+// quad/trace.cpp — the component's surface view and field-guided tracing along mesh edges
+// (the motorcycle graph of the patch layout, quad/quad.h step 1).
+// Separatrices run along mesh edges, not across triangles: two edge paths of an embedded
+// mesh can only meet at a vertex, so "stop at the first claimed vertex" yields an embedded
+// layout graph without any intersection arithmetic. To keep an edge path on the field line
+// the walk tracks the ideal streamline point and picks the forward neighbour closest to it.
+#include <algorithm>
+#include <cmath>
+
+#include "quad/detail/layout.h"
+
+namespace genbrep::quad_detail {
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+Vec3 to_vec(const OpenMesh::Vec3d& p) { return Vec3(p[0], p[1], p[2]); }
+}  // namespace
+
+Surface::Surface(const TriMesh& m, const Partition& p, const CrossField& f, int c)
+    : mesh(m), partition(p), field(f), component(c) {
+  const int nv = static_cast<int>(m.n_vertices()), nf = static_cast<int>(m.n_faces());
+  point.resize(nv);
+  for (int v = 0; v < nv; ++v) point[v] = to_vec(m.point(m.vertex_handle(v)));
+  face_normal.assign(nf, Vec3::Zero());
+  vertex_normal.assign(nv, Vec3::Zero());
+  vertex_size.assign(nv, 0.0);
+  std::vector<int> count(nv, 0);
+  for (int f = 0; f < nf; ++f) {
+    int corner[3], k = 0;
+    for (auto v : m.fv_range(m.face_handle(f))) corner[k++] = v.idx();
+    const Vec3 n = (point[corner[1]] - point[corner[0]]).cross(point[corner[2]] - point[corner[0]]);
+    face_normal[f] = n.norm() > 0 ? n.normalized() : Vec3(0, 0, 1);
+    if (!in(f)) continue;
+    const double size = 0.5 * (field.size_u[f] + field.size_v[f]);
+    for (int v : corner) {
+      vertex_normal[v] += n;
+      vertex_size[v] += size;
+      ++count[v];
+    }
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (!count[v]) continue;
+    vertices.push_back(v);
+    vertex_size[v] /= count[v];
+    vertex_normal[v] = vertex_normal[v].norm() > 0 ? vertex_normal[v].normalized() : Vec3(0, 0, 1);
+  }
+}
+
+int Surface::face(int h) const {
+  const auto fh = mesh.face_handle(mesh.halfedge_handle(h));
+  return fh.is_valid() ? fh.idx() : -1;
+}
+int Surface::from(int h) const { return mesh.from_vertex_handle(mesh.halfedge_handle(h)).idx(); }
+int Surface::to(int h) const { return mesh.to_vertex_handle(mesh.halfedge_handle(h)).idx(); }
+int Surface::ccw(int h) const {
+  return mesh.opposite_halfedge_handle(mesh.prev_halfedge_handle(mesh.halfedge_handle(h))).idx();
+}
+double Surface::corner_angle(int h) const {
+  const int f = face(h);
+  if (f < 0) return 0;
+  const int a = from(h), b = to(h);
+  const int c = mesh.to_vertex_handle(mesh.next_halfedge_handle(mesh.halfedge_handle(h))).idx();
+  const Vec3 u = point[b] - point[a], w = point[c] - point[a];
+  return std::atan2(u.cross(w).norm(), u.dot(w));
+}
+Vec3 Surface::snap(int f, const Vec3& d) const {
+  const Vec3 u = field.direction.row(f).transpose();
+  const Vec3 v = face_normal[f].cross(u);
+  const double a = d.dot(u), b = d.dot(v);
+  if (std::abs(a) >= std::abs(b)) return a >= 0 ? u : Vec3(-u);
+  return b >= 0 ? v : Vec3(-v);
+}
+double Surface::size_along(int f, const Vec3& d) const {
+  const Vec3 u = field.direction.row(f).transpose();
+  const double a = std::abs(d.normalized().dot(u));
+  return a >= std::sqrt(0.5) ? field.size_u[f] : field.size_v[f];
+}
+Vec3 Surface::tangent(int v, const Vec3& d) const {
+  const Vec3 t = d - vertex_normal[v] * vertex_normal[v].dot(d);
+  return t.norm() > 1e-12 ? t.normalized() : d.normalized();
+}
+
+void register_curve(const Surface& s, Layout& layout, int c) {
+  const Curve& curve = layout.curves[c];
+  const int n = static_cast<int>(curve.vertices.size());
+  const int edges = curve.closed ? n : n - 1;
+  for (int i = 0; i < n; ++i) layout.claimed[curve.vertices[i]] = 1;
+  for (int i = 0; i < edges; ++i) {
+    const int j = (i + 1) % n;
+    const auto h = s.mesh.find_halfedge(s.mesh.vertex_handle(curve.vertices[i]),
+                                        s.mesh.vertex_handle(curve.vertices[j]));
+    GENBREP_CHECK(h.is_valid(), Code::Internal, "quad: layout curve leaves the mesh edges");
+    layout.edge_curve[s.mesh.edge_handle(h).idx()] = c;
+    layout.halfedge_dir[h.idx()] = curve.direction[i];
+    layout.halfedge_dir[h.idx() ^ 1] = -curve.direction[j];
+  }
+}
+
+Layout start_layout(const Surface& s, const Diagnostics&) {
+  Layout layout;
+  const int nv = static_cast<int>(s.mesh.n_vertices());
+  layout.edge_curve.assign(s.mesh.n_edges(), -1);
+  layout.claimed.assign(nv, 0);
+  layout.node.assign(nv, 0);
+  layout.halfedge_dir.assign(s.mesh.n_halfedges(), Vec3::Zero());
+  layout.on_loop.assign(nv, 0);
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  for (int v : s.vertices) lo = lo.cwiseMin(s.point[v]), hi = hi.cwiseMax(s.point[v]);
+  layout.length_cap = (hi - lo).norm();
+  for (int l = 0; l < static_cast<int>(s.partition.loops.size()); ++l) {
+    const BoundaryLoop& loop = s.partition.loops[l];
+    if (loop.component != s.component) continue;
+    Curve curve;
+    curve.vertices = loop.vertices;
+    curve.closed = true;
+    curve.loop = l;
+    const int n = static_cast<int>(loop.vertices.size());
+    // Tangent from a chord of about half a target edge length: the raw loops zigzag along
+    // voxel stairs, and a one-edge tangent would be off by up to 45°.
+    for (int i = 0; i < n; ++i) {
+      const int v = loop.vertices[i];
+      const double reach = 0.5 * s.vertex_size[v];
+      int a = i, b = i;
+      double la = 0, lb = 0;
+      for (int k = 0; k < n / 4 && (la < reach || lb < reach); ++k) {
+        const int na = (a + n - 1) % n, nb = (b + 1) % n;
+        if (la < reach) la += (s.point[loop.vertices[na]] - s.point[loop.vertices[a]]).norm(), a = na;
+        if (lb < reach) lb += (s.point[loop.vertices[nb]] - s.point[loop.vertices[b]]).norm(), b = nb;
+      }
+      if (a == b) a = (i + n - 1) % n, b = (i + 1) % n;
+      curve.direction.push_back(s.tangent(v, s.point[loop.vertices[b]] - s.point[loop.vertices[a]]));
+    }
+    for (int v : loop.vertices) layout.on_loop[v] = 1;
+    layout.curves.push_back(curve);
+    register_curve(s, layout, static_cast<int>(layout.curves.size()) - 1);
+  }
+  for (const Singularity& sing : s.field.singularities)
+    if (sing.component == s.component && sing.on_boundary) layout.node[sing.vertex] = 1;
+  return layout;
+}
+
+namespace {
+
+// One step of the walk from v along d: the neighbour not joined to v by a curve edge that
+// is closest to the ideal line (origin, d) with forward progress; -1 if there is none.
+int next_vertex(const Surface& s, const Layout& layout, int v, const Vec3& origin, const Vec3& d,
+                const std::vector<int>& allowed) {
+  int best = -1;
+  double best_score = 1e300;
+  for (int h : allowed) {
+    if (layout.edge_curve[h >> 1] >= 0) continue;
+    const int w = s.to(h);
+    const Vec3 e = s.point[w] - s.point[v];
+    const double forward = e.dot(d);
+    if (forward <= 0.2 * e.norm()) continue;
+    Vec3 offset = s.point[w] - origin;
+    offset -= d * offset.dot(d);
+    offset -= s.vertex_normal[w] * s.vertex_normal[w].dot(offset);
+    const double score = offset.norm() - 1e-3 * forward;
+    if (score < best_score) best_score = score, best = h;
+  }
+  return best;
+}
+
+// The field direction at vertex v closest to d: snapped on the fan face d points into.
+Vec3 field_at(const Surface& s, int v, const Vec3& d) {
+  int best = -1;
+  double best_dot = -2;
+  for (auto fh : s.mesh.vf_range(s.mesh.vertex_handle(v))) {
+    if (!s.in(fh.idx())) continue;
+    Vec3 c = Vec3::Zero();
+    for (auto u : s.mesh.fv_range(fh)) c += s.point[u.idx()] / 3.0;
+    const double dot = (c - s.point[v]).normalized().dot(d);
+    if (dot > best_dot) best_dot = dot, best = fh.idx();
+  }
+  if (best < 0) return d;
+  return s.tangent(v, s.snap(best, d));
+}
+
+}  // namespace
+
+namespace {
+
+// A sector of the component's fan at a vertex: outgoing spokes counter-clockwise with the
+// polar angle (sum of corner angles) at which each begins, and the polar angles where a
+// field direction of a sector face leaves the vertex inside that face.
+struct Sector {
+  std::vector<int> spokes;
+  std::vector<double> polar;
+  double total = 0;
+  std::vector<double> field_polar;
+};
+
+Sector make_sector(const Surface& s, int vertex, int first, int last) {
+  Sector sector;
+  sector.polar.push_back(0);
+  for (int h = first, guard = 0; guard < 64; ++guard) {
+    if (!s.in(s.face(h))) return Sector();
+    sector.spokes.push_back(h);
+    sector.polar.push_back(sector.polar.back() + s.corner_angle(h));
+    h = s.ccw(h);
+    if (h == last) break;
+  }
+  sector.total = sector.polar.back();
+  for (size_t j = 0; j < sector.spokes.size(); ++j) {
+    const int f = s.face(sector.spokes[j]);
+    const Vec3 e = (s.point[s.to(sector.spokes[j])] - s.point[vertex]).normalized();
+    const Vec3 u = s.field.direction.row(f).transpose();
+    const Vec3 n = s.face_normal[f];
+    for (int r = 0; r < 4; ++r) {
+      const double angle = r * kPi / 2;
+      const Vec3 c = std::cos(angle) * u + std::sin(angle) * n.cross(u);
+      const double a = std::atan2(n.cross(e).dot(c), e.dot(c));
+      if (a >= 0 && a <= s.corner_angle(sector.spokes[j]))
+        sector.field_polar.push_back(sector.polar[j] + a);
+    }
+  }
+  std::sort(sector.field_polar.begin(), sector.field_polar.end());
+  return sector;
+}
+
+// The unit tangent leaving `vertex` at polar angle `angle` of the sector.
+Vec3 sector_direction(const Surface& s, const Sector& sector, int vertex, double angle) {
+  angle = std::fmod(std::fmod(angle, sector.total) + sector.total, sector.total);
+  size_t k = 0;
+  while (k + 1 < sector.spokes.size() && sector.polar[k + 1] < angle) ++k;
+  const int f = s.face(sector.spokes[k]);
+  const Vec3 e = (s.point[s.to(sector.spokes[k])] - s.point[vertex]).normalized();
+  const double a = angle - sector.polar[k];
+  return s.tangent(vertex, std::cos(a) * e + std::sin(a) * s.face_normal[f].cross(e));
+}
+
+// Walks from `vertex` along d (first step restricted to `allowed` outgoing halfedges)
+// until it reaches a claimed vertex; registers the curve.
+bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<int> allowed,
+                     Vec3 d, bool snap_to_field) {
+  // A first step onto a claimed vertex would enclose a one-triangle patch.
+  allowed.erase(std::remove_if(allowed.begin(), allowed.end(),
+                               [&](int h) { return layout.claimed[s.to(h)] != 0; }),
+                allowed.end());
+  if (allowed.empty()) return false;
+  Curve curve;
+  curve.vertices.push_back(vertex);
+  curve.direction.push_back(d);
+  Vec3 origin = s.point[vertex];
+  int v = vertex;
+  std::vector<int> visited{vertex};
+  double travelled = 0;
+  const double length_cap = layout.length_cap;
+  for (int step = 0; step < static_cast<int>(s.vertices.size()) + 1; ++step) {
+    int h = -1;
+    // Near a singular vertex ahead, head straight for it: separatrices that pass a
+    // singularity at less than a third of an edge length would leave a sliver patch.
+    for (int a : layout.attractors) {
+      if (a == vertex || a == v) continue;
+      const Vec3 to_a = s.point[a] - s.point[v];
+      if (to_a.norm() > 0.75 * s.vertex_size[v] || to_a.normalized().dot(d) < 0.6) continue;
+      double best = to_a.norm();
+      for (int c : allowed) {
+        if (layout.edge_curve[c >> 1] >= 0) continue;
+        const double dist = (s.point[a] - s.point[s.to(c)]).norm();
+        if (dist < best) best = dist, h = c;
+      }
+      if (h >= 0) break;
+    }
+    if (h < 0) h = next_vertex(s, layout, v, origin, d, allowed);
+    if (h < 0) {  // no forward edge: take any free edge rather than leave a dangling end
+      double best_forward = -1e300;
+      for (int c : allowed) {
+        if (layout.edge_curve[c >> 1] >= 0) continue;
+        if (!s.in(s.face(c)) && !s.in(s.face(c ^ 1))) continue;
+        const double forward = (s.point[s.to(c)] - s.point[v]).dot(d);
+        if (forward > best_forward) best_forward = forward, h = c;
+      }
+      if (h < 0) break;
+    }
+    const int w = s.to(h);
+    const Vec3 step_vector = s.point[w] - s.point[v];
+    origin += d * (s.point[w] - origin).dot(d);
+    const Vec3 heading = step_vector.dot(d) > 0 ? d : Vec3(step_vector.normalized());
+    d = snap_to_field ? field_at(s, w, heading) : s.tangent(w, heading);
+    curve.vertices.push_back(w);
+    curve.direction.push_back(d);
+    const bool own = std::find(visited.begin(), visited.end(), w) != visited.end();
+    travelled += step_vector.norm();
+    // A transversal crossing of another separatrix is passed through (no T-junction, so
+    // opposite patch sides stay single arcs); loops, singular vertices, the trace itself
+    // and near-parallel meetings end the trace.
+    bool cross = false;
+    if (layout.allow_crossing && layout.claimed[w] && !own && !layout.on_loop[w] &&
+        travelled < length_cap &&
+        std::find(layout.attractors.begin(), layout.attractors.end(), w) == layout.attractors.end()) {
+      for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(w)))
+        if (layout.edge_curve[oh.idx() >> 1] >= 0 &&
+            std::abs(layout.halfedge_dir[oh.idx()].dot(d)) < 0.5)
+          cross = true;
+    }
+    if ((layout.claimed[w] && !cross) || own) {
+      const int c = static_cast<int>(layout.curves.size());
+      layout.curves.push_back(curve);
+      register_curve(s, layout, c);
+      layout.node[vertex] = 1;
+      layout.node[w] = 1;
+      ++layout.separatrices;
+      return true;
+    }
+    // Claim as we go so that traces of one round see each other.
+    visited.push_back(w);
+    v = w;
+    allowed.clear();
+    for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(v))) allowed.push_back(oh.idx());
+  }
+  ++layout.dropped_traces;
+  return false;
+}
+
+}  // namespace
+
+bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int last,
+                double fraction, bool snap_to_field) {
+  const Sector sector = make_sector(s, vertex, first, last);
+  if (sector.total <= 0 || sector.spokes.size() < 2) return false;
+  double angle = fraction * sector.total, best = 1e300;
+  if (snap_to_field)
+    for (double p : sector.field_polar)
+      if (p > 0.2 * sector.total && p < 0.8 * sector.total &&
+          std::abs(p - fraction * sector.total) < best)
+        best = std::abs(p - fraction * sector.total), angle = p;
+  const Vec3 d = sector_direction(s, sector, vertex, angle);
+  // Interior spokes only: the first step must not run along the sector's own curves.
+  std::vector<int> allowed(sector.spokes.begin() + 1, sector.spokes.end());
+  return trace_direction(s, layout, vertex, allowed, d, snap_to_field);
+}
+
+// Separatrix directions of a singular vertex: `valence` evenly spaced polar angles,
+// rotated so that they best match the field directions leaving the vertex.
+std::vector<Vec3> singular_directions(const Surface& s, int vertex, int valence,
+                                      std::vector<int>* spokes) {
+  int spoke = -1;
+  for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(vertex))) { spoke = oh.idx(); break; }
+  const Sector sector = make_sector(s, vertex, spoke, spoke);
+  if (sector.total <= 0) return {};
+  *spokes = sector.spokes;
+  const double step = sector.total / valence;
+  double offset = 0.5 * step, best = 1e300;
+  for (double c : sector.field_polar) {
+    double cost = 0;
+    for (double p : sector.field_polar) {
+      const double r = std::fmod(std::abs(p - c), step);
+      cost += std::min(r, step - r);
+    }
+    if (cost < best) best = cost, offset = c;
+  }
+  std::vector<Vec3> directions;
+  for (int k = 0; k < valence; ++k)
+    directions.push_back(sector_direction(s, sector, vertex, offset + k * step));
+  return directions;
+}
+
+void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& options,
+                        Diagnostics& diagnostics) {
+  std::vector<Singularity> interior, concave;
+  for (const Singularity& sing : s.field.singularities) {
+    if (sing.component != s.component) continue;
+    if (sing.on_boundary) {
+      if (sing.index < 0) concave.push_back(sing);
+    } else {
+      interior.push_back(sing);
+    }
+  }
+  // Cancelling ± pairs (the zigzag of unrelaxed loops leaves them one ring apart).
+  std::vector<char> cancelled(interior.size(), 0);
+  struct Pair { double distance; int a, b; };
+  std::vector<Pair> pairs;
+  for (size_t i = 0; i < interior.size(); ++i)
+    for (size_t j = i + 1; j < interior.size(); ++j) {
+      if ((interior[i].index > 0) == (interior[j].index > 0)) continue;
+      const double dist = (s.point[interior[i].vertex] - s.point[interior[j].vertex]).norm();
+      const double limit = options.pair_cancel_distance *
+          0.5 * (s.vertex_size[interior[i].vertex] + s.vertex_size[interior[j].vertex]);
+      if (dist < limit) pairs.push_back({dist, int(i), int(j)});
+    }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+    return x.distance != y.distance ? x.distance < y.distance : x.a != y.a ? x.a < y.a : x.b < y.b;
+  });
+  for (const Pair& p : pairs) {
+    if (cancelled[p.a] || cancelled[p.b]) continue;
+    if (std::abs(interior[p.a].index) != 1 || std::abs(interior[p.b].index) != 1) continue;
+    cancelled[p.a] = cancelled[p.b] = 1;
+    ++layout.cancelled_pairs;
+  }
+  // Separatrices leave in `valence` evenly spaced polar directions snapped to the field,
+  // traced in turns (one separatrix of every singularity per round) so no singularity
+  // claims the surface first.
+  const std::string who = "component " + std::to_string(s.component);
+  // Singularities within `boundary_absorb_distance` of a loop are left to the boundary:
+  // unrelaxed loops zigzag and the field compensates one ring inside with ± pairs (their
+  // indices cancel along the loop); tracing them would cut slivers along every loop.
+  int absorbed = 0;
+  std::vector<int> loop_vertices;
+  for (const Curve& c : layout.curves)
+    if (c.closed) loop_vertices.insert(loop_vertices.end(), c.vertices.begin(), c.vertices.end());
+  for (size_t i = 0; i < interior.size(); ++i) {
+    if (cancelled[i]) continue;
+    const int v = interior[i].vertex;
+    for (int w : loop_vertices)
+      if ((s.point[v] - s.point[w]).norm() < options.boundary_absorb_distance * s.vertex_size[v]) {
+        cancelled[i] = 1;
+        ++absorbed;
+        break;
+      }
+  }
+  if (absorbed)
+    diagnostics.push_back(who + ": " + std::to_string(absorbed) +
+                          " singularities next to a loop left to the boundary (not traced)");
+  // All separatrix directions first; then traced in turns (the k-th of every singularity
+  // per round) so no singularity claims the surface first. A direction already taken by
+  // a separatrix that arrived from elsewhere is skipped.
+  struct Start { int vertex; Vec3 direction; double spacing; std::vector<int> spokes; };
+  std::vector<std::vector<Start>> rounds;
+  for (size_t i = 0; i < interior.size(); ++i) {
+    if (cancelled[i]) continue;
+    const int valence = 4 - interior[i].index;
+    if (valence < 1) continue;
+    layout.attractors.push_back(interior[i].vertex);
+    std::vector<int> spokes;
+    const std::vector<Vec3> directions = singular_directions(s, interior[i].vertex, valence, &spokes);
+    for (size_t k = 0; k < directions.size(); ++k) {
+      if (rounds.size() <= k) rounds.resize(k + 1);
+      rounds[k].push_back({interior[i].vertex, directions[k], 2 * kPi / valence, spokes});
+    }
+  }
+  for (int a : layout.attractors) layout.claimed[a] = 1;
+  layout.allow_crossing = options.cross_separatrices;
+  int missing = 0;
+  for (const auto& round : rounds)
+    for (const Start& start : round) {
+      bool taken = false;
+      for (int h : start.spokes)
+        if (layout.edge_curve[h >> 1] >= 0 &&
+            std::acos(std::clamp(layout.halfedge_dir[h].dot(start.direction), -1.0, 1.0)) <
+                0.5 * start.spacing)
+          taken = true;
+      if (taken) continue;
+      missing += !trace_direction(s, layout, start.vertex, start.spokes, start.direction, true);
+    }
+  layout.allow_crossing = false;
+  if (missing)
+    diagnostics.push_back(who + ": " + std::to_string(missing) +
+                          " separatrices could not leave their singularity");
+  for (const Singularity& sing : concave) {
+    // The component's fan at a boundary vertex runs from its outgoing loop edge
+    // counter-clockwise to the reverse of its incoming loop edge.
+    int first = -1, last = -1;
+    for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(sing.vertex))) {
+      const int h = oh.idx();
+      if (layout.edge_curve[h >> 1] < 0) continue;
+      if (s.in(s.face(h))) first = h;
+      else last = h;
+    }
+    if (first < 0 || last < 0) continue;
+    for (int k = 0; k < -sing.index; ++k)
+      if (!trace_from(s, layout, sing.vertex, first, last, (k + 1.0) / (1 - sing.index), true))
+        diagnostics.push_back(who + ": no separatrix could leave concave corner " +
+                              std::to_string(sing.vertex));
+  }
+  if (layout.cancelled_pairs)
+    diagnostics.push_back("component " + std::to_string(s.component) + ": " +
+                          std::to_string(layout.cancelled_pairs) +
+                          " cancelling singularity pairs not traced");
+}
+
+}  // namespace genbrep::quad_detail

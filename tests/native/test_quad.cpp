@@ -1,0 +1,290 @@
+// Tests for quad/: a pure-quad cage per organic component (paper §6), on level-set
+// scenes. Validity is checked here by code independent of quad/: manifoldness and
+// orientation from the quads alone, each quad's normal against the design's nearest
+// triangle, and every boundary chain against its partition loop's polyline.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "field/field.h"
+#include "incidence/incidence.h"
+#include "level_set.h"
+#include "mesh/mesh.h"
+#include "partition/partition.h"
+#include "quad/quad.h"
+#include "relax/relax.h"
+#include "scenes.h"
+
+using namespace genbrep;
+using namespace genbrep::testing;
+
+namespace {
+
+struct Converted {
+  explicit Converted(TriangleMesh prepared)
+      : design(std::move(prepared)), mesh(to_trimesh(design)) {}
+  TriangleMesh design;
+  TriMesh mesh;
+  Partition partition;
+};
+
+Converted run(const Scene& s) {
+  Converted r(prepare_closed_mesh(s.design, "design", nullptr));
+  std::vector<SolidInput> prepared = s.solids;
+  for (auto& solid : prepared) solid.mesh = prepare_closed_mesh(solid.mesh, solid.name, nullptr);
+  const SolidSet solids(prepared, nullptr);
+  IncidenceOptions options;
+  options.tolerance = s.h;
+  const Incidence incidence = compute_incidence(r.design, solids, options, Context());
+  r.partition = partition(r.mesh, incidence, solids.size(), {}, Context());
+  return r;
+}
+
+// The boundary relaxation of §5.3 (relax/) as the pipeline runs it before quad/: smooth
+// loops, so the field has no ± singularity pairs next to voxel zigzags.
+Converted relaxed(const Converted& r) {
+  const Relaxed x = relax(r.design, r.partition, {}, Context());
+  Converted out(x.design);
+  out.partition = x.partition;
+  for (const auto& d : x.diagnostics) std::printf("[relax] %s\n", d.c_str());
+  return out;
+}
+
+Converted all_organic(const Field& sdf, const Vec3& lo, const Vec3& hi, double h) {
+  const Vec3 origin = lo - Vec3(0.37 * h, 0.29 * h, 0.41 * h);
+  const Vec3 size = (hi - origin) / h;
+  const Eigen::Vector3i cells(static_cast<int>(std::ceil(size.x())) + 1,
+                              static_cast<int>(std::ceil(size.y())) + 1,
+                              static_cast<int>(std::ceil(size.z())) + 1);
+  Converted r(prepare_closed_mesh(extract_level_set(sdf, origin, h, cells), "design", nullptr));
+  Incidence incidence;
+  for (Eigen::Index v = 0; v < r.design.vertices.rows(); ++v) {
+    incidence.offsets.push_back(0);
+    incidence.eroded_seed.push_back(-1);
+  }
+  r.partition = partition(r.mesh, incidence, 0, {}, Context());
+  return r;
+}
+
+double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double t = ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// Independent validity check of one cage; returns the number of problems (printed).
+int check_cage(const QuadCage& cage, const Converted& r) {
+  int problems = 0;
+  auto fail = [&](const std::string& what) {
+    if (problems++ < 10) std::printf("  invalid: %s\n", what.c_str());
+  };
+  const int nv = static_cast<int>(cage.vertices.rows());
+  // Orientation and manifold edges: each directed edge once, each undirected edge ≤ 2.
+  std::map<std::pair<int, int>, int> directed;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      if (a < 0 || a >= nv || a == b) fail("quad " + std::to_string(q) + " has a bad corner");
+      if (directed[{a, b}]++) fail("directed edge used twice");
+    }
+  std::set<std::pair<int, int>> boundary;  // directed, quad on the left
+  for (const auto& [e, n] : directed)
+    if (!directed.count({e.second, e.first})) boundary.insert(e);
+  // Manifold vertices: the quads around a vertex form one fan (linked through shared edges).
+  std::vector<std::vector<int>> vertex_quads(nv);
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) vertex_quads[cage.quads(q, k)].push_back(static_cast<int>(q));
+  for (int v = 0; v < nv; ++v) {
+    const auto& qs = vertex_quads[v];
+    if (qs.empty()) { fail("unused vertex"); continue; }
+    std::map<int, int> parent;
+    std::function<int(int)> find = [&](int x) { return parent[x] == x ? x : parent[x] = find(parent[x]); };
+    for (int q : qs) parent[q] = q;
+    std::map<int, std::vector<int>> by_neighbour;
+    for (int q : qs)
+      for (int k = 0; k < 4; ++k)
+        if (cage.quads(q, k) == v) {
+          by_neighbour[cage.quads(q, (k + 1) % 4)].push_back(q);
+          by_neighbour[cage.quads(q, (k + 3) % 4)].push_back(q);
+        }
+    for (auto& [w, list] : by_neighbour)
+      for (size_t i = 1; i < list.size(); ++i) parent[find(list[i])] = find(list[0]);
+    std::set<int> roots;
+    for (int q : qs) roots.insert(find(q));
+    if (roots.size() != 1) fail("vertex " + std::to_string(v) + " is non-manifold");
+  }
+  // Normals: the quad's against the design triangle nearest to its centre.
+  std::vector<Vec3> centroid, normal;
+  for (auto f : r.mesh.faces()) {
+    Vec3 p[3];
+    int k = 0;
+    for (auto v : r.mesh.fv_range(f)) {
+      const auto& q = r.mesh.point(v);
+      p[k++] = Vec3(q[0], q[1], q[2]);
+    }
+    centroid.push_back((p[0] + p[1] + p[2]) / 3);
+    normal.push_back((p[1] - p[0]).cross(p[2] - p[0]).normalized());
+  }
+  int flipped = 0;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    Vec3 c[4];
+    for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+    const Vec3 centre = (c[0] + c[1] + c[2] + c[3]) / 4;
+    size_t best = 0;
+    for (size_t f = 1; f < centroid.size(); ++f)
+      if ((centroid[f] - centre).squaredNorm() < (centroid[best] - centre).squaredNorm()) best = f;
+    if ((c[2] - c[0]).cross(c[3] - c[1]).dot(normal[best]) <= 0) ++flipped;
+  }
+  if (flipped) fail(std::to_string(flipped) + " quads face against the design");
+  // Degenerate quads: a corner angle below 1° (or a zero-length side).
+  int degenerate = 0;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    bool bad = false;
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 p = cage.vertices.row(cage.quads(q, k)).transpose();
+      const Vec3 a = Vec3(cage.vertices.row(cage.quads(q, (k + 1) % 4)).transpose()) - p;
+      const Vec3 b = Vec3(cage.vertices.row(cage.quads(q, (k + 3) % 4)).transpose()) - p;
+      bad |= a.norm() == 0 || b.norm() == 0 || std::atan2(a.cross(b).norm(), a.dot(b)) < M_PI / 180;
+    }
+    degenerate += bad;
+  }
+  if (degenerate) fail(std::to_string(degenerate) + " degenerate quads");
+  // Boundary chains: closed cycles of boundary edges on their loops, covering the boundary.
+  double diagonal = bounding_box_diagonal(r.design.vertices);
+  std::set<std::pair<int, int>> covered;
+  std::set<int> loops_seen;
+  for (size_t c = 0; c < cage.boundary_chains.size(); ++c) {
+    const auto& chain = cage.boundary_chains[c];
+    const int loop = cage.chain_loop[c];
+    if (loop < 0 || loop >= static_cast<int>(r.partition.loops.size()) ||
+        r.partition.loops[loop].component != cage.component || !loops_seen.insert(loop).second) {
+      fail("chain " + std::to_string(c) + " names a wrong loop");
+      continue;
+    }
+    const auto& lv = r.partition.loops[loop].vertices;
+    for (size_t i = 0; i < chain.size(); ++i) {
+      const std::pair<int, int> e{chain[i], chain[(i + 1) % chain.size()]};
+      if (!boundary.count(e)) fail("chain edge is not a boundary edge with the cage on its left");
+      covered.insert(e);
+      const Vec3 p = cage.vertices.row(chain[i]).transpose();
+      double d = 1e300;
+      for (size_t j = 0; j < lv.size(); ++j) {
+        const auto& a = r.mesh.point(r.mesh.vertex_handle(lv[j]));
+        const auto& b = r.mesh.point(r.mesh.vertex_handle(lv[(j + 1) % lv.size()]));
+        d = std::min(d, point_segment_distance(p, Vec3(a[0], a[1], a[2]), Vec3(b[0], b[1], b[2])));
+      }
+      if (d > 1e-6 * diagonal) fail("chain vertex off its loop by " + std::to_string(d));
+    }
+  }
+  for (const auto& l : r.partition.loops)
+    if (l.component == cage.component && !loops_seen.count(static_cast<int>(&l - &r.partition.loops[0])))
+      fail("a loop of the component has no chain");
+  if (covered.size() != boundary.size()) fail("boundary edges outside every chain");
+  return problems;
+}
+
+QuadResult extract_and_check(const std::string& name, const Converted& r, int* problems) {
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  const auto start = std::chrono::steady_clock::now();
+  QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  *problems = 0;
+  for (size_t c = 0; c < result.cages.size(); ++c) {
+    const QuadStats& s = result.stats[c];
+    std::printf(
+        "[quad] %s component %zu: %d quads, %d patches, %d separatrices, field singularities "
+        "%zu, interior valence 4 %.1f%% (%d/%d), boundary valence 3 %.1f%% (%d/%d), "
+        "irregular %d, angle deviation mean %.2f max %.1f deg, flipped %d, degenerate %d, "
+        "%.3f s\n",
+        name.c_str(), c, s.quads, s.patches, s.separatrices, field.singularities.size(),
+        100 * s.interior_valence4_fraction(), s.interior_valence4, s.interior_vertices,
+        100 * s.boundary_valence3_fraction(), s.boundary_valence3, s.boundary_vertices,
+        s.irregular_vertices, s.mean_angle_deviation_deg, s.max_angle_deviation_deg,
+        s.flipped_quads, s.degenerate_quads, s.seconds);
+    *problems += check_cage(result.cages[c], r);
+  }
+  for (const auto& d : result.diagnostics) std::printf("[quad] %s: %s\n", name.c_str(), d.c_str());
+  std::printf("[quad] %s: %zu triangles, %.3f s\n", name.c_str(), r.mesh.n_faces(), seconds);
+  return result;
+}
+
+// Issue 5's quality targets for level-set inputs.
+void expect_targets(const std::string& name, const QuadStats& s) {
+  EXPECT_GE(s.interior_valence4_fraction(), 0.95) << name;
+  EXPECT_GE(s.boundary_valence3_fraction(), 0.90) << name;
+  EXPECT_LE(s.mean_angle_deviation_deg, 12.0) << name;
+  EXPECT_EQ(s.flipped_quads, 0) << name;
+  EXPECT_EQ(s.degenerate_quads, 0) << name;
+}
+
+}  // namespace
+
+// Scenes whose layout the quantized patch layout cannot yet handle are DISABLED_ below:
+// they are known failures, described with their causes in docs/quad_method.md
+// (run them with --gtest_also_run_disabled_tests).
+
+TEST(Quad, TubeIsAnAnnulusWithTwoChains) {
+  const Converted r = relaxed(run(tube_scene(0.03)));
+  int problems = 0;
+  const QuadResult result = extract_and_check("tube", r, &problems);
+  ASSERT_EQ(result.cages.size(), 1u);
+  EXPECT_EQ(problems, 0);
+  EXPECT_EQ(result.cages[0].boundary_chains.size(), 2u);
+  expect_targets("tube", result.stats[0]);
+}
+
+TEST(Quad, TwoArchesGiveTwoValidCages) {
+  const Converted r = relaxed(run(two_arches_scene(0.05)));
+  int problems = 0;
+  const QuadResult result = extract_and_check("two_arches", r, &problems);
+  EXPECT_EQ(problems, 0);
+  ASSERT_EQ(result.cages.size(), 2u);
+  for (const auto& s : result.stats) expect_targets("two_arches", s);
+}
+
+TEST(Quad, DISABLED_GrownBoxIsADisk) {
+  const Converted r = relaxed(run(grown_box_scene(0.04)));
+  int problems = 0;
+  const QuadResult result = extract_and_check("grown_box", r, &problems);
+  ASSERT_EQ(result.cages.size(), 1u);
+  EXPECT_EQ(problems, 0);
+  EXPECT_EQ(result.cages[0].boundary_chains.size(), 1u);
+}
+
+TEST(Quad, DISABLED_ClosedSphereHasEightValenceThreeVertices) {
+  const Converted r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
+                                  Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.06);
+  int problems = 0;
+  const QuadResult result = extract_and_check("sphere", r, &problems);
+  ASSERT_EQ(result.cages.size(), 1u);
+  EXPECT_EQ(problems, 0);
+  EXPECT_TRUE(result.cages[0].boundary_chains.empty());
+}
+
+TEST(Quad, DISABLED_BoltHole) {
+  const Converted r = relaxed(run(bolt_hole_scene(0.05)));
+  int problems = 0;
+  const QuadResult result = extract_and_check("bolt_hole", r, &problems);
+  EXPECT_EQ(problems, 0);
+  ASSERT_EQ(result.cages.size(), 1u);
+  expect_targets("bolt_hole", result.stats[0]);
+}
+
+// Where the layout fails (grown_box today, see docs/quad_method.md), the component gets a
+// named failure and no cage; any cage that is returned passes the independent checks.
+TEST(Quad, AFailingComponentIsReportedNotReturnedInvalid) {
+  const Converted r = relaxed(run(grown_box_scene(0.04)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  const QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
+  EXPECT_EQ(result.cages.size() + result.failures.size(), 1u);
+  for (const auto& cage : result.cages) EXPECT_EQ(check_cage(cage, r), 0);
+  for (const auto& failure : result.failures) {
+    EXPECT_EQ(failure.component, 0);
+    EXPECT_FALSE(failure.reason.empty());
+    std::printf("[quad] grown_box: no cage: %s\n", failure.reason.c_str());
+  }
+}
