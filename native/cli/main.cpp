@@ -17,7 +17,7 @@ const char* kUsage =
     "usage: genbrep convert --design FILE [--keep-in FILE]... [--keep-out FILE]...\n"
     "                       [--seed FILE]... [--tolerance D | --grid OX,OY,OZ,H]\n"
     "                       [--until STAGE] [--target-edge-length L] [--density S]\n"
-    "                       [--field-obj] --out DIR\n"
+    "                       [--fitting smooth|tight|boundary_tight] [--field-obj] --out DIR\n"
     "       genbrep --version\n"
     "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json, DIR/partition.ply, DIR/relaxed.ply\n"
     "(the design after boundary relaxation, same face properties) and, with\n"
@@ -82,6 +82,12 @@ Command parse(int argc, char** argv) {
       cmd.options.field.target_edge_length = parse_number(value(), flag);
     } else if (flag == "--density") {
       cmd.options.field.density = parse_number(value(), flag);
+    } else if (flag == "--fitting") {
+      const std::string name = value();
+      if (name == "smooth") cmd.options.fit.strategy = FitStrategy::Smooth;
+      else if (name == "tight") cmd.options.fit.strategy = FitStrategy::Tight;
+      else if (name == "boundary_tight") cmd.options.fit.strategy = FitStrategy::BoundaryTight;
+      else throw UsageError("--fitting expects smooth, tight or boundary_tight");
     } else if (flag == "--field-obj") {
       cmd.field_obj = true;
     } else if (flag == "--until") {
@@ -116,6 +122,12 @@ int run_convert(int argc, char** argv) {
   if (ran(result, "relax")) {
     write_partition_ply((cmd.out / "relaxed.ply").string(), result.relaxed.design, result.relaxed.partition);
     std::cout << "wrote " << (cmd.out / "relaxed.ply").string() << '\n';
+  }
+  for (const QuadCage& cage : final_cages(result)) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "cage_%03d.obj", cage.component);
+    write_cage_obj((cmd.out / name).string(), cage);
+    std::cout << "wrote " << (cmd.out / name).string() << " (" << cage.quads.rows() << " quads)\n";
   }
   if (cmd.field_obj) {
     if (!ran(result, "field")) throw UsageError("--field-obj needs the field stage (check --until)");

@@ -25,6 +25,20 @@ void write_text_file(const std::string& path, const std::string& text) {
   if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
 }
 
+void write_cage_obj(const std::string& path, const QuadCage& cage) {
+  auto out = open_for_writing(path, std::ios::out | std::ios::trunc);
+  out.precision(17);
+  out << "# genbrep cage of organic component " << cage.component << "\n";
+  for (Eigen::Index v = 0; v < cage.vertices.rows(); ++v) {
+    out << "v " << cage.vertices(v, 0) << ' ' << cage.vertices(v, 1) << ' ' << cage.vertices(v, 2) << '\n';
+  }
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    out << "f " << cage.quads(q, 0) + 1 << ' ' << cage.quads(q, 1) + 1 << ' ' << cage.quads(q, 2) + 1 << ' '
+        << cage.quads(q, 3) + 1 << '\n';
+  }
+  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+}
+
 void write_partition_ply(const std::string& path, const TriangleMesh& design,
                          const Partition& partition) {
   auto out = open_for_writing(path, std::ios::out | std::ios::binary | std::ios::trunc);

@@ -10,6 +10,9 @@
 namespace genbrep {
 
 void write_text_file(const std::string& path, const std::string& text);
+// A cage as an OBJ of quads (Blender imports it as an editable mesh; add a Subdivision
+// Surface modifier with the cage's scheme to see the fitted surface).
+void write_cage_obj(const std::string& path, const QuadCage& cage);
 void write_partition_ply(const std::string& path, const TriangleMesh& design,
                          const Partition& partition);
 

@@ -9,7 +9,7 @@ namespace genbrep {
 const char* const kVersion = "0.1.0";
 
 const std::vector<std::string>& stage_names() {
-  static const std::vector<std::string> names{"mesh", "incidence", "partition", "relax", "field"};
+  static const std::vector<std::string> names{"mesh", "incidence", "partition", "relax", "field", "quad", "fit"};
   return names;
 }
 
@@ -35,6 +35,48 @@ void run_stage(const std::string& stage, Result* result, const Context& context,
 }
 
 }  // namespace
+
+std::vector<QuadCage> final_cages(const Result& result) {
+  if (!ran(result, "fit")) return result.quads.cages;
+  std::vector<QuadCage> cages;
+  for (const auto& f : result.fitted) cages.push_back(f.cage);
+  return cages;
+}
+
+TriangleMesh component_region(const TriangleMesh& design, const Partition& partition, int component) {
+  std::vector<int> index(static_cast<size_t>(design.vertices.rows()), -1);
+  std::vector<int> faces;
+  for (size_t f = 0; f < partition.face_component.size(); ++f) {
+    if (partition.face_component[f] == component) faces.push_back(static_cast<int>(f));
+  }
+  TriangleMesh region;
+  region.triangles.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  int count = 0;
+  for (size_t i = 0; i < faces.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      int& v = index[design.triangles(faces[i], k)];
+      if (v < 0) v = count++;
+      region.triangles(static_cast<Eigen::Index>(i), k) = v;
+    }
+    region.triangle_source.push_back(faces[i]);
+  }
+  region.vertices.resize(count, 3);
+  for (size_t v = 0; v < index.size(); ++v) {
+    if (index[v] >= 0) region.vertices.row(index[v]) = design.vertices.row(static_cast<Eigen::Index>(v));
+  }
+  return region;
+}
+
+std::vector<std::vector<Vec3>> chain_curves(const TriangleMesh& design, const Partition& partition,
+                                            const QuadCage& cage) {
+  std::vector<std::vector<Vec3>> curves;
+  for (int loop : cage.chain_loop) {
+    std::vector<Vec3> curve;
+    for (int v : partition.loops[loop].vertices) curve.push_back(design.vertices.row(v));
+    curves.push_back(std::move(curve));
+  }
+  return curves;
+}
 
 bool ran(const Result& result, const std::string& stage) {
   return std::find(result.stages_run.begin(), result.stages_run.end(), stage) != result.stages_run.end();
@@ -93,6 +135,24 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
   if (wanted("field")) {
     run_stage("field", &result, context, [&] {
       result.field = compute_field(*mesh, result.relaxed.partition, options.field, context);
+    });
+  }
+  if (wanted("quad")) {
+    run_stage("quad", &result, context, [&] {
+      result.quads = extract_cages(*mesh, result.relaxed.partition, result.field, options.quad, context);
+    });
+  }
+  if (wanted("fit")) {
+    run_stage("fit", &result, context, [&] {
+      FitOptions fit_options = options.fit;
+      if (fit_options.delta <= 0 && options.incidence.mode == IncidenceOptions::Mode::Grid) {
+        fit_options.delta = 3 * options.incidence.grid_h;  // δ = 3h for level sets (§6.3)
+      }
+      for (const QuadCage& cage : result.quads.cages) {
+        const TriangleMesh region = component_region(result.relaxed.design, result.relaxed.partition, cage.component);
+        result.fitted.push_back(fit_cage(cage, region, chain_curves(result.relaxed.design, result.relaxed.partition, cage),
+                                         fit_options, context));
+      }
     });
   }
   result.report_json = make_report(inputs, options, result);

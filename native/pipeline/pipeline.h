@@ -11,9 +11,11 @@
 #include "core/error.h"
 #include "core/types.h"
 #include "field/field.h"
+#include "fit/fit.h"
 #include "incidence/incidence.h"
 #include "mesh/mesh.h"
 #include "partition/partition.h"
+#include "quad/quad.h"
 #include "relax/relax.h"
 
 namespace genbrep {
@@ -28,6 +30,8 @@ struct Options {
   PartitionOptions partition;
   RelaxOptions relax;  // tolerance 0 = the incidence tolerance d
   FieldOptions field;
+  QuadOptions quad;
+  FitOptions fit;     // delta 0 = 3h with grid incidence (§6.3), else fit's own default
   std::string until;  // last stage to run; empty = all
 };
 
@@ -49,6 +53,8 @@ struct Result {
   Partition partition;             // of `design`
   Relaxed relaxed;                 // §5.3: the design and partition the later stages use
   CrossField field;                // per triangle of relaxed.design
+  QuadResult quads;                // §6: a cage per organic component that could be meshed
+  std::vector<Fitted> fitted;      // §6.3: the fitted cages, same order as quads.cages
   std::vector<std::string> stages_run;
   std::vector<StageTiming> timings;
   Diagnostics diagnostics;         // the mesh stage's notes (welds, flips)
@@ -56,6 +62,15 @@ struct Result {
 };
 
 Result convert(const Inputs& inputs, const Options& options, const Context& context);
+
+// The cages to hand on: fitted if fit ran, else the extracted ones.
+std::vector<QuadCage> final_cages(const Result& result);
+
+// The organic triangles of one component as an open mesh, and its boundary loops as
+// polylines in the order of `cage.chain_loop` (what fit_cage takes).
+TriangleMesh component_region(const TriangleMesh& design, const Partition& partition, int component);
+std::vector<std::vector<Vec3>> chain_curves(const TriangleMesh& design, const Partition& partition,
+                                            const QuadCage& cage);
 
 // Whether `stage` ran in the conversion that gave `result`.
 bool ran(const Result& result, const std::string& stage);

@@ -128,11 +128,52 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     field["components"] = components;
     report["field"] = field;
   }
+  if (ran(result, "quad")) {
+    json cages = json::array();
+    for (size_t i = 0; i < result.quads.cages.size(); ++i) {
+      const QuadStats& s = result.quads.stats[i];
+      json cage = {{"component", result.quads.cages[i].component},
+                   {"quads", s.quads},
+                   {"quad_fraction", 1.0},
+                   {"interior_valence4_fraction", s.interior_valence4_fraction()},
+                   {"boundary_valence3_fraction", s.boundary_valence3_fraction()},
+                   {"irregular_vertices", s.irregular_vertices},
+                   {"mean_angle_deviation_degrees", s.mean_angle_deviation_deg},
+                   {"max_angle_deviation_degrees", s.max_angle_deviation_deg},
+                   {"flipped_quads", s.flipped_quads},
+                   {"patches", s.patches},
+                   {"seconds", s.seconds}};
+      if (i < result.fitted.size()) {
+        const FitReport& f = result.fitted[i].report;
+        cage["fit"] = {{"strategy", strategy_name(f.strategy)},
+                       {"control_points", f.control_points},
+                       {"delta", f.delta},
+                       {"rms_design_to_limit", f.rms_design_to_limit},
+                       {"max_design_to_limit", f.max_design_to_limit},
+                       {"rms_limit_to_design", f.rms_limit_to_design},
+                       {"max_limit_to_design", f.max_limit_to_design},
+                       {"max_boundary_distance", f.max_boundary_distance},
+                       {"rounds", f.rounds},
+                       {"refinements", f.refinements},
+                       {"bound_held", f.bound_held},
+                       {"seconds", f.seconds}};
+      }
+      cages.push_back(cage);
+    }
+    json failures = json::array();
+    for (const auto& f : result.quads.failures) failures.push_back({{"component", f.component}, {"reason", f.reason}});
+    report["cages"] = cages;
+    report["cage_failures"] = failures;
+  }
   json diagnostics = result.diagnostics;
   for (const auto& d : result.incidence.diagnostics) diagnostics.push_back(d);
   for (const auto& d : p.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.relaxed.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.field.diagnostics) diagnostics.push_back(d);
+  for (const auto& d : result.quads.diagnostics) diagnostics.push_back("quad: " + d);
+  for (const auto& f : result.fitted) {
+    for (const auto& d : f.report.diagnostics) diagnostics.push_back("fit: " + d);
+  }
   report["diagnostics"] = diagnostics;
   return report.dump(2);
 }

@@ -118,6 +118,12 @@ Options to_options(const py::object& obj) {
     } else if (key == "size_scale") {
       options.field.density = value.cast<double>();
       if (!(options.field.density > 0)) throw Error(Code::InvalidInput, "option size_scale must be positive");
+    } else if (key == "fitting") {
+      const std::string name = value.cast<std::string>();
+      if (name == "smooth") options.fit.strategy = FitStrategy::Smooth;
+      else if (name == "tight") options.fit.strategy = FitStrategy::Tight;
+      else if (name == "boundary_tight") options.fit.strategy = FitStrategy::BoundaryTight;
+      else throw Error(Code::InvalidInput, "option fitting must be smooth, tight or boundary_tight, got '" + name + "'");
     } else if (key == "until") {
       options.until = value.is_none() ? "" : value.cast<std::string>();
     } else {
@@ -212,7 +218,28 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
   } else {
     out["field"] = py::none();
   }
-  out["cages"] = py::list();
+  py::list cages;
+  for (const QuadCage& cage : final_cages(result)) {
+    py::dict c;
+    c["name"] = "component " + std::to_string(cage.component);
+    c["component"] = cage.component;
+    c["vertices"] = matrix_to_array(cage.vertices);
+    c["faces"] = matrix_to_array(cage.quads);
+    std::vector<int> pairs;
+    for (const auto& e : cage.crease_edges) pairs.insert(pairs.end(), e.begin(), e.end());
+    py::array_t<int32_t> crease_edges({static_cast<py::ssize_t>(cage.crease_edges.size()), py::ssize_t(2)});
+    std::copy(pairs.begin(), pairs.end(), crease_edges.mutable_data());
+    c["crease_edges"] = crease_edges;
+    c["crease_values"] = py::array_t<float>(static_cast<py::ssize_t>(cage.crease_values.size()), cage.crease_values.data());
+    py::dict scheme;
+    scheme["boundary_smooth"] = cage.scheme.boundary_smooth_all ? "ALL" : "PRESERVE_CORNERS";
+    scheme["use_limit_surface"] = cage.scheme.use_limit_surface;
+    scheme["quality"] = cage.scheme.quality;
+    scheme["levels"] = cage.scheme.levels;
+    c["subdivision"] = scheme;
+    cages.append(c);
+  }
+  out["cages"] = cages;
   out["composed"] = py::none();
   return out;
 }
@@ -248,7 +275,7 @@ PYBIND11_MODULE(genbrep_native, m) {
   bind_fit(m);
   // Option keys convert() accepts, so callers can send only what this build understands.
   m.attr("OPTION_KEYS") = py::make_tuple("tolerance", "incidence", "grid_origin", "grid_h", "until",
-                                         "target_edge_length", "size_scale");
+                                         "target_edge_length", "size_scale", "fitting");
 
   m.def(
       "convert",

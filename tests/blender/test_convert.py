@@ -30,9 +30,19 @@ def test_convert_writes_partition_collection(open_fixture):
     assert _convert() == {"FINISHED"}
     collection = bpy.data.collections[COLLECTION]
     assert collection.name in bpy.context.scene.collection.children
-    names = sorted(o.name for o in collection.objects)
+    report = json.loads(collection[results.REPORT_PROPERTY])
+    cage_names = sorted(o.name for o in collection.objects if " cage " in o.name)
+    names = sorted(o.name for o in collection.objects if " cage " not in o.name)
     assert names == ["design boundary loops", "design cross field", "design partition",
                      "design singularities"]
+    # One cage object per cage the pipeline made, shown through its Subdivision Surface.
+    assert len(cage_names) == len(report["cages"])
+    for name in cage_names:
+        cage = collection.objects[name]
+        assert all(len(p.vertices) == 4 for p in cage.data.polygons)
+        modifier = cage.modifiers[0]
+        assert modifier.type == "SUBSURF" and modifier.use_limit_surface
+        assert modifier.boundary_smooth == "ALL"
 
     mesh = collection.objects["design partition"].data
     solid = _face_ints(mesh, results.PARTITION_SOLID_ATTRIBUTE)
@@ -42,7 +52,6 @@ def test_convert_writes_partition_collection(open_fixture):
     assert np.all(component[solid >= 0] == -1)
     assert mesh.color_attributes[results.PARTITION_COLOR_ATTRIBUTE].domain == "CORNER"
     assert mesh.materials[0].name == "genbrep partition"
-    report = json.loads(collection[results.REPORT_PROPERTY])
     assert report["counts"]["organic_components"] == 4
 
     # The cross field: a two-edge cross per organic face, hidden until the user shows it;

@@ -57,7 +57,15 @@ def test_partition_of_each_scene(native, scenes, scene, mode):
     chi = {"grown_box": 1, "tube": 0, "two_arches": 0, "eroded_seed": 1, "bolt_hole": 1}[scene]
     for c in range(components):
         assert field["singular_index"][field["singular_component"] == c].sum() == 4 * chi
-    assert result["cages"] == [] and result["composed"] is None
+    # Cages: pure quads, finite control points, one per component that could be meshed;
+    # every component without a cage is named in the report with its reason.
+    for cage in result["cages"]:
+        assert cage["faces"].shape[1] == 4 and np.isfinite(cage["vertices"]).all()
+        assert cage["faces"].max() < len(cage["vertices"])
+        assert cage["subdivision"]["boundary_smooth"] == "ALL" and cage["subdivision"]["use_limit_surface"]
+    failed = {f["component"] for f in report["cage_failures"]}
+    assert {c["component"] for c in result["cages"]} | failed == set(range(components))
+    assert result["composed"] is None
 
 
 def test_face_source_maps_back_to_input_triangles(native, scenes):
