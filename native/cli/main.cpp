@@ -129,6 +129,15 @@ int run_convert(int argc, char** argv) {
     write_cage_obj((cmd.out / name).string(), cage);
     std::cout << "wrote " << (cmd.out / name).string() << " (" << cage.quads.rows() << " quads)\n";
   }
+  if (ran(result, "compose")) {
+    if (result.composed.report.ok) {
+      write_composed((cmd.out / "composed.obj").string(), (cmd.out / "composed.ply").string(), result.composed.mesh);
+      std::cout << "wrote " << (cmd.out / "composed.obj").string() << " and composed.ply ("
+                << result.composed.mesh.triangles.rows() << " triangles, closed and 2-manifold)\n";
+    } else {
+      std::cout << "not composed: see the diagnostics in report.json\n";
+    }
+  }
   if (cmd.field_obj) {
     if (!ran(result, "field")) throw UsageError("--field-obj needs the field stage (check --until)");
     write_field_obj((cmd.out / "field.obj").string(), to_trimesh(result.relaxed.design), result.field);

@@ -9,7 +9,7 @@ namespace genbrep {
 const char* const kVersion = "0.1.0";
 
 const std::vector<std::string>& stage_names() {
-  static const std::vector<std::string> names{"mesh", "incidence", "partition", "relax", "field", "quad", "fit"};
+  static const std::vector<std::string> names{"mesh", "incidence", "partition", "relax", "field", "quad", "fit", "compose"};
   return names;
 }
 
@@ -153,6 +153,12 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
         result.fitted.push_back(fit_cage(cage, region, chain_curves(result.relaxed.design, result.relaxed.partition, cage),
                                          fit_options, context));
       }
+    });
+  }
+  if (wanted("compose")) {
+    run_stage("compose", &result, context, [&] {
+      const auto sheets = organic_sheets(result.relaxed.design, result.relaxed.partition);
+      result.composed = compose(sheets, *solids, options.compose, context);
     });
   }
   result.report_json = make_report(inputs, options, result);

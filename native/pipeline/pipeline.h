@@ -9,6 +9,7 @@
 
 #include "core/context.h"
 #include "core/error.h"
+#include "compose/compose.h"
 #include "core/types.h"
 #include "field/field.h"
 #include "fit/fit.h"
@@ -32,6 +33,7 @@ struct Options {
   FieldOptions field;
   QuadOptions quad;
   FitOptions fit;     // delta 0 = 3h with grid incidence (§6.3), else fit's own default
+  ComposeOptions compose;
   std::string until;  // last stage to run; empty = all
 };
 
@@ -55,6 +57,9 @@ struct Result {
   CrossField field;                // per triangle of relaxed.design
   QuadResult quads;                // §6: a cage per organic component that could be meshed
   std::vector<Fitted> fitted;      // §6.3: the fitted cages, same order as quads.cages
+  // §7–8: the watertight solid. Its organic surfaces are, for now, the relaxed design's
+  // organic regions (the stand-in of issue 7), not yet the fitted cages' limit surfaces.
+  Composed composed;
   std::vector<std::string> stages_run;
   std::vector<StageTiming> timings;
   Diagnostics diagnostics;         // the mesh stage's notes (welds, flips)

@@ -165,12 +165,46 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     report["cages"] = cages;
     report["cage_failures"] = failures;
   }
+  if (ran(result, "compose")) {
+    const ComposeReport& c = result.composed.report;
+    json contacts = json::array();
+    for (const auto& contact : result.composed.contacts) {
+      contacts.push_back({{"component", contact.component},
+                          {"established", contact.established},
+                          {"eta", contact.eta},
+                          {"doublings", contact.doublings},
+                          {"additive", contact.additive},
+                          {"contact_curves", contact.curves.size()}});
+    }
+    report["composed"] = {{"ok", c.ok},
+                          {"organic_surface", "relaxed design region (stand-in until cages are pulled)"},
+                          {"vertices", c.vertices},
+                          {"triangles", c.triangles},
+                          {"boundary_edges", c.boundary_edges},
+                          {"non_manifold_edges", c.non_manifold_edges},
+                          {"non_manifold_vertices", c.non_manifold_vertices},
+                          {"inconsistent_edges", c.inconsistent_edges},
+                          {"self_intersecting", c.self_intersecting},
+                          {"volume", c.volume},
+                          {"volume_vs_design", result.design_validation.signed_volume != 0
+                                                   ? c.volume / result.design_validation.signed_volume
+                                                   : 0.0},
+                          {"shells", c.shells},
+                          {"genus", c.genus},
+                          {"organic_cells", c.organic_cells},
+                          {"solid_cells", c.solid_cells},
+                          {"contacts", contacts}};
+  }
   json diagnostics = result.diagnostics;
   for (const auto& d : result.incidence.diagnostics) diagnostics.push_back(d);
   for (const auto& d : p.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.relaxed.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.field.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.quads.diagnostics) diagnostics.push_back("quad: " + d);
+  for (const auto& d : result.composed.report.diagnostics) diagnostics.push_back("compose: " + d);
+  for (const auto& contact : result.composed.contacts) {
+    for (const auto& d : contact.diagnostics) diagnostics.push_back("compose: " + d);
+  }
   for (const auto& f : result.fitted) {
     for (const auto& d : f.report.diagnostics) diagnostics.push_back("fit: " + d);
   }

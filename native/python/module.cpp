@@ -240,7 +240,15 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
     cages.append(c);
   }
   out["cages"] = cages;
-  out["composed"] = py::none();
+  if (ran(result, "compose") && result.composed.report.ok) {
+    py::dict composed;
+    composed["vertices"] = matrix_to_array(result.composed.mesh.vertices);
+    composed["faces"] = matrix_to_array(result.composed.mesh.triangles);
+    composed["face_source"] = vector_to_array(result.composed.mesh.triangle_source);
+    out["composed"] = composed;
+  } else {
+    out["composed"] = py::none();
+  }
   return out;
 }
 

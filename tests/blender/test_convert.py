@@ -33,8 +33,10 @@ def test_convert_writes_partition_collection(open_fixture):
     report = json.loads(collection[results.REPORT_PROPERTY])
     cage_names = sorted(o.name for o in collection.objects if " cage " in o.name)
     names = sorted(o.name for o in collection.objects if " cage " not in o.name)
-    assert names == ["design boundary loops", "design cross field", "design partition",
-                     "design singularities"]
+    assert names == ["design boundary loops", "design composed", "design cross field",
+                     "design partition", "design singularities"]
+    assert report["composed"]["ok"]
+    assert len(collection.objects["design composed"].data.polygons) == report["composed"]["triangles"]
     # One cage object per cage the pipeline made, shown through its Subdivision Surface.
     assert len(cage_names) == len(report["cages"])
     for name in cage_names:

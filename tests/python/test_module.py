@@ -65,7 +65,15 @@ def test_partition_of_each_scene(native, scenes, scene, mode):
         assert cage["subdivision"]["boundary_smooth"] == "ALL" and cage["subdivision"]["use_limit_surface"]
     failed = {f["component"] for f in report["cage_failures"]}
     assert {c["component"] for c in result["cages"]} | failed == set(range(components))
-    assert result["composed"] is None
+    # The composed solid: closed, 2-manifold and oriented by an independent count, and
+    # within 2% of the design's volume.
+    composed = result["composed"]
+    assert report["composed"]["ok"], report["diagnostics"]
+    counts = native.validate_mesh(composed["vertices"], composed["faces"])
+    assert counts["closed_manifold"], counts
+    assert counts["signed_volume"] == pytest.approx(report["inputs"]["design"]["volume"], rel=0.02)
+    sources = set(composed["face_source"])
+    assert sources & set(range(len(solids))) and min(sources) < 0  # solid and organic faces
 
 
 def test_face_source_maps_back_to_input_triangles(native, scenes):

@@ -1,0 +1,97 @@
+// compose/compose.h — contact curves (§7.1–7.3) and the watertight composed solid (§8).
+// Takes: one open organic sheet per component (the partition's organic triangles as a
+// stand-in, or a fitted cage's tessellated limit surface), each boundary loop tagged with
+// the solids it borders, and the prepared input solids with their roles.
+// Gives: per component the pulled sheet, the safety tolerance η used and the contact
+// curves C = O ∩ ∂S matched one to one with the boundary loops; the composed mesh with
+// each face's source; a report of measured checks.
+// Method: per component, pull (pull/) with η doubling until C is homeomorphic to ∂O
+// (§7.3); cut O at C and close the kept part T with the caps of ∂S it encloses into a
+// closed oriented surface Q (exact constructions, so the caps lie exactly on ∂S). Then the
+// cellular classification of §8.2 is evaluated as exact Booleans on closed meshes:
+//   G = (((P \ ⋃ bites) ∪ ⋃ additive Q) ∪ K) \ L
+// with P the seeds, K the keep-ins, L the keep-outs, an additive Q one enclosing positive
+// volume (its T faces outward: rule 2) and a bite one enclosing negative volume (T facing
+// into the cell: rule 3, a seed's eroded part). Cells inside a keep-in are inside (∪ K
+// last); cells bounded by solid faces only are inside iff inside S (seeds; keep-outs are
+// subtracted); cells seen from both orientations are inside (additive after the bites,
+// rule 4) and reported. No two operands are nearly coincident: they either cross
+// transversally or share exactly coplanar faces.
+// Guarantees: faces on input solids carry the input's vertex positions (new vertices lie
+// only on intersection curves); the report is measured on the returned double mesh.
+// A component whose contact cannot be established (a gap between solids, §9.1) fails
+// the composition with a diagnostic naming the solids and the gap; nothing is hidden.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/context.h"
+#include "core/error.h"
+#include "core/types.h"
+#include "incidence/incidence.h"
+#include "pull/pull.h"
+
+namespace genbrep {
+
+struct ComposeOptions {
+  // η₀ of §7.3, design units (< 0). 0 = −1e-4 × the bounding-box diagonal.
+  double initial_eta = 0;
+  int max_doublings = 10;  // η → 2η at most this often
+  PullOptions pull;
+};
+
+// One contact curve C_i,j: a closed polyline on ∂S, with the sheet loop it corresponds to.
+struct ContactCurve {
+  int loop = -1;  // sheet loop index; -1 = matches no loop (reported)
+  std::vector<Vec3> points;
+};
+
+struct ComponentContact {
+  int component = -1;
+  double eta = 0;              // η that made C homeomorphic to ∂O, design units
+  int doublings = 0;
+  bool established = false;    // pulled and homeomorphic
+  bool additive = true;        // Q encloses material (else a bite out of a seed)
+  double cell_volume = 0;      // signed volume of Q, design units³
+  OrganicSheet pulled;
+  std::vector<double> max_distance_before;  // per loop: max F on the boundary before the pull
+  std::vector<double> max_distance_after;   // and after (≤ η when established)
+  std::vector<ContactCurve> curves;
+  Diagnostics diagnostics;
+};
+
+struct ComposeReport {
+  bool ok = false;             // composed, closed, manifold, oriented, no self-intersection
+  int vertices = 0, triangles = 0;
+  int boundary_edges = 0, non_manifold_edges = 0, non_manifold_vertices = 0;
+  int inconsistent_edges = 0;
+  bool self_intersecting = false;
+  double volume = 0;
+  int shells = 0;
+  int genus = 0;               // Σ genus over shells, from Euler's formula
+  int organic_cells = 0;       // closed organic cells Q (additive + bites)
+  int solid_cells = 0;         // solid operands (keep-ins, seeds, keep-outs)
+  int solid_faces = 0, organic_faces = 0;
+  double seconds_contact = 0, seconds_boolean = 0;
+  Diagnostics diagnostics;
+};
+
+// Face sources: solid index ≥ 0, or organic component c encoded as −1 − c.
+inline int organic_source(int component) { return -1 - component; }
+
+struct Composed {
+  TriangleMesh mesh;           // triangle_source = face source as above
+  std::vector<ComponentContact> contacts;
+  ComposeReport report;
+};
+
+// §7.2–7.3 for one sheet: pull, cut, check, doubling η as needed.
+ComponentContact establish_contact(const OrganicSheet& sheet, const SolidSet& solids,
+                                   const ComposeOptions& options);
+
+// §7 then §8 for all sheets. Throws Error{Cancelled} on cancel; everything else is in the
+// report (ok = false and a named diagnostic when the composition cannot be valid).
+Composed compose(const std::vector<OrganicSheet>& sheets, const SolidSet& solids,
+                 const ComposeOptions& options, const Context& context);
+
+}  // namespace genbrep

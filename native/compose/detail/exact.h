@@ -1,0 +1,63 @@
+// compose/detail/exact.h — the exact-construction meshes compose/ works on (internal).
+// Everything from contact curves to the final Booleans runs on CGAL's Epeck kernel: the
+// contact vertices are constructed exactly on the solid's planes, so the caps cut out of
+// ∂S coincide exactly with ∂S and corefinement resolves them as coplanar faces instead of
+// nearly coincident ones (the failure mode §8.1 warns of). Input vertices are doubles and
+// convert back to the same doubles: faces from input solids keep the input's positions.
+#pragma once
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <string>
+#include <vector>
+
+#include "core/types.h"
+#include "pull/pull.h"
+
+namespace genbrep::detail {
+
+using Exact = CGAL::Exact_predicates_exact_constructions_kernel;
+using ExactPoint = Exact::Point_3;
+using ExactMesh = CGAL::Surface_mesh<ExactPoint>;
+
+ExactMesh to_exact(const TriangleMesh& mesh);
+// Rounds to doubles; vertex order is the mesh's.
+TriangleMesh to_double(const ExactMesh& mesh);
+
+// Orders exact points lexicographically (to merge and match vertices across meshes).
+struct PointLess {
+  bool operator()(const ExactPoint& a, const ExactPoint& b) const {
+    return CGAL::compare_xyz(a, b) == CGAL::SMALLER;
+  }
+};
+
+// One organic cell boundary Q_c: the organic sheet trimmed at its contact curves plus the
+// caps it encloses on ∂S, closed and consistently oriented (see contact.cpp).
+struct OrganicCell {
+  int component = -1;
+  ExactMesh closed;          // Q_c, oriented like the organic surface
+  ExactMesh trimmed;         // T_c = O_c cut at C, the part the result keeps
+  bool additive = true;      // Q_c encloses positive volume: material, else a bite
+  double volume = 0;         // signed, design units³
+};
+
+// Result of cutting one pulled sheet at ∂S: contact polylines (per sheet loop, -1 where
+// unmatched) and, when they match the loops one to one, the cell.
+struct ContactCut {
+  std::vector<std::vector<Vec3>> curves;
+  std::vector<int> curve_loop;
+  bool homeomorphic = false;
+  std::string problem;       // why not, in words
+  bool has_cell = false;
+  OrganicCell cell;
+};
+
+// Unites the given solids' meshes exactly (the loop's S of §7.1). Throws on failure.
+ExactMesh solid_union(const std::vector<SolidInput>& solids, const std::vector<int>& members);
+
+// §7.3's check and the trimming: corefines the pulled sheet with ∂S, extracts C = O ∩ ∂S,
+// checks that every loop's end of O is an annulus bounded by that loop and exactly one
+// contact curve, and builds Q_c.
+ContactCut cut_at_contact(const OrganicSheet& pulled, const ExactMesh& solid_union_mesh);
+
+}  // namespace genbrep::detail

@@ -1,0 +1,129 @@
+// pull/pull.h — boundary pull, paper §7.1–7.3.
+// Takes: an organic surface as an open triangle sheet per organic component, each of its
+// boundary loops tagged with the solids it borders (§7.1), and the input solids.
+// Gives: the sheet with every boundary loop moved so that D(∂O) = max_t F(c(t)) ≤ η < 0,
+// where F = σ·D_S, D_S the signed distance to the union S of the loop's bordering solids
+// (≤ 0 inside) and σ the side of S the organic surface lies on (+1 outside: material grown
+// from a keep-in or reaching a keep-out; −1 inside: a seed's eroded part). The boundary
+// displacement is blended into a few rings of the interior so no triangle folds.
+// The curve itself is abstract (BoundaryCurve: samples as sparse weights over control
+// points, c(t_j) = Σ N_i(t_j) c_i), so the same descent pulls the polyline boundary of the
+// stand-in sheet (hat functions over its boundary vertices) and, once fit/ lands, the limit
+// boundary of a cage (EDGE_ONLY: the uniform cubic B-spline of the boundary chain, or the
+// weights LimitSurface::weights gives on boundary edges).
+// Guarantees: deterministic; a loop that does not converge within max_iterations is
+// reported with the points that stay outside (a gap between solids, §9.1), never hidden.
+// Complexity: O(iterations · samples · |S| · log |T_S|) distance queries per loop.
+#pragma once
+#include <vector>
+
+#include "core/error.h"
+#include "core/types.h"
+#include "incidence/incidence.h"
+#include "partition/partition.h"
+
+namespace genbrep {
+
+// One boundary loop of a sheet: sheet vertex indices, closed (last joins first), organic
+// side on the left (partition's convention), with the solids it borders.
+struct SheetLoop {
+  std::vector<int> vertices;
+  std::vector<int> solids;
+  int partition_loop = -1;
+};
+
+// The organic surface of one component as an open, oriented (outward of the design)
+// triangle sheet whose boundary is exactly its loops.
+struct OrganicSheet {
+  int component = -1;
+  TriangleMesh mesh;  // triangle_source: design triangle (stand-in) or cage quad
+  std::vector<SheetLoop> loops;
+};
+
+// The stand-in organic surfaces: the organic triangles of each component of the partition,
+// with `tangential_rounds` rounds of tangential Laplacian smoothing (λ = 1/2) of interior
+// vertices: level sets of fields constant along an axis give exactly coplanar strips whose
+// rounded slivers overlap, which exact predicates see as self-intersections; moving
+// vertices within their tangent plane removes them and keeps the shape (it is a stand-in
+// for the fitted surface, which replaces it).
+std::vector<OrganicSheet> organic_sheets(const TriangleMesh& design, const Partition& partition,
+                                         int tangential_rounds = 3);
+
+// A closed curve c(t) = Σ N_i(t) c_i, sampled: sample s is Σ weights[k]·c[controls[k]] for
+// k in [offsets[s], offsets[s+1]).
+struct BoundaryCurve {
+  int control_count = 0;
+  std::vector<int> offsets{0};
+  std::vector<int> controls;
+  std::vector<double> weights;
+  int sample_count() const { return static_cast<int>(offsets.size()) - 1; }
+};
+
+// The closed polyline through n control points (hat basis), `samples_per_edge` samples per
+// edge starting at each control point.
+BoundaryCurve polyline_curve(int control_count, int samples_per_edge);
+// The closed uniform cubic B-spline of n ≥ 3 control points: the Catmull–Clark limit
+// boundary of a cage chain under EDGE_ONLY (no boundary creases), for the cage variant.
+BoundaryCurve cubic_bspline_curve(int control_count, int samples_per_span);
+
+// F(p) = σ · min_j D_j(p) over a set of solids (the union's signed distance outside,
+// its depth bound inside) and its gradient, the unit normal at the projection point (§7.2's
+// normal approximation; central differences when p lies on the surface).
+class SideDistance {
+ public:
+  SideDistance(const SolidSet& solids, std::vector<int> members, int side);
+  double value(const Vec3& p, Vec3* gradient = nullptr) const;
+  // The member whose surface is nearest p.
+  int nearest_member(const Vec3& p) const;
+
+ private:
+  const SolidSet* solids_;
+  std::vector<int> members_;
+  int side_;
+  double scale_;
+};
+
+struct PullOptions {
+  int max_iterations = 100;     // descent steps per η (paper: e.g. 100)
+  double overshoot = 0.25;      // each step aims at (1 + overshoot)·η, dimensionless
+  int samples_per_edge = 4;     // stand-in polyline: samples per boundary edge
+  int blend_rings = 3;          // interior rings the boundary displacement fades over
+  int max_blend_rings = 24;     // rings are doubled up to this while triangles fold
+};
+
+struct CurvePull {
+  bool converged = false;
+  int iterations = 0;
+  double max_before = 0;         // max_t F(c(t)) before, design units
+  double max_after = 0;          // and after
+  std::vector<int> stuck_samples;  // samples still above η
+};
+
+// §7.2: gradient descent on the control points until max_t F(c(t)) ≤ η. Each violating
+// sample asks for the displacement δ = −(F − η')·∇F (η' = (1+overshoot)·η); a control
+// point takes the largest of N_i·δ/ΣN_k² over the samples in its support.
+CurvePull pull_curve(const BoundaryCurve& curve, const SideDistance& distance, double eta,
+                     const PullOptions& options, std::vector<Vec3>* controls);
+
+struct LoopPull {
+  int side = 1;                  // σ: +1 organic outside the loop's solids, −1 inside
+  CurvePull curve;
+  double max_displacement = 0;   // design units
+  std::vector<Vec3> stuck_points;  // positions of samples still above η
+};
+
+struct SheetPull {
+  OrganicSheet sheet;            // the pulled sheet (same topology as the input)
+  double eta = 0;
+  std::vector<LoopPull> loops;   // per sheet loop
+  int blend_rings = 0;           // rings actually used
+  int folded_triangles = 0;      // triangles whose normal turned over (0 unless reported)
+  bool converged() const;
+  Diagnostics diagnostics;
+};
+
+// Pulls every loop of `sheet` to η (< 0) and blends the displacement into the interior.
+SheetPull pull_sheet(const OrganicSheet& sheet, const SolidSet& solids, double eta,
+                     const PullOptions& options);
+
+}  // namespace genbrep
