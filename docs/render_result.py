@@ -25,6 +25,9 @@ def parse_args():
     parser.add_argument("--height", type=int, default=540)
     parser.add_argument("--view", type=float, nargs=3, default=(1.0, -1.5, 1.1),
                         help="direction from the results to the camera")
+    parser.add_argument("--panels", action="store_true",
+                        help="one image of three panels side by side: partition colours, "
+                             "cages (limit surface with the control cage drawn), composed solid")
     return parser.parse_args(argv)
 
 
@@ -86,8 +89,57 @@ def main():
     scene.render.filepath = bpy.path.abspath(args.out)
     frame(scene, shown, args.view)
     light(scene)
-    bpy.ops.render.render(write_still=True)
+    if args.panels:
+        render_panels(scene, result_panels(scene), args.out)
+    else:
+        bpy.ops.render.render(write_still=True)
     print(f"render_result.py: wrote {args.out}")
+
+
+def result_panels(scene):
+    """Objects of each panel: partition (with loops), cages (with their wire), composed."""
+    objects = [o for c in scene.collection.children if c.name.startswith("genbrep ")
+               for o in c.all_objects]
+    partition = [o for o in objects if o.name.endswith((" partition", " boundary loops"))]
+    cages = [o for o in objects if " cage " in o.name]
+    wires = []
+    for cage in cages:  # the control cage as thin dark bars over its limit surface
+        wire = bpy.data.objects.new(cage.name + " wire", cage.data)
+        wire.matrix_world = cage.matrix_world
+        modifier = wire.modifiers.new("wire", "WIREFRAME")
+        modifier.thickness = 0.004 * max(cage.dimensions)
+        material = bpy.data.materials.new("render cage wire")
+        material.diffuse_color = (0.05, 0.05, 0.08, 1.0)
+        material.use_nodes = True
+        material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.03, 0.03, 0.05, 1)
+        wire.data = cage.data.copy()
+        wire.data.materials.clear()
+        wire.data.materials.append(material)
+        cage.users_collection[0].objects.link(wire)
+        wires.append(wire)
+    composed = [o for o in objects if o.name.endswith(" composed")]
+    return [p for p in (partition, cages + wires, composed) if p]
+
+
+def render_panels(scene, panels, out):
+    """Renders each panel alone and writes them side by side into `out`."""
+    import numpy as np
+    everything = {o for panel in panels for o in panel}
+    strips = []
+    for index, panel in enumerate(panels):
+        for obj in everything:
+            obj.hide_render = obj not in panel
+        scene.render.filepath = bpy.path.abspath(out) + f".panel{index}.png"
+        bpy.ops.render.render(write_still=True)
+        image = bpy.data.images.load(scene.render.filepath)
+        width, height = image.size
+        strips.append(np.array(image.pixels[:], dtype=np.float32).reshape(height, width, 4))
+    joined = np.concatenate(strips, axis=1)
+    result = bpy.data.images.new("panels", joined.shape[1], joined.shape[0], alpha=True)
+    result.pixels.foreach_set(joined.ravel())
+    result.filepath_raw = bpy.path.abspath(out)
+    result.file_format = "PNG"
+    result.save()
 
 
 if __name__ == "__main__":
