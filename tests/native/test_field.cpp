@@ -13,6 +13,7 @@
 #include "level_set.h"
 #include "mesh/mesh.h"
 #include "partition/partition.h"
+#include "partitioned.h"
 #include "scenes.h"
 
 using namespace genbrep;
@@ -21,46 +22,6 @@ using namespace genbrep::testing;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// The mesh is built in the constructor: a default-constructed TriMesh here would make GCC
-// emit OpenMesh's property vtables in this file and warn (-Wmaybe-uninitialized) inside them.
-struct Converted {
-  explicit Converted(TriangleMesh prepared)
-      : design(std::move(prepared)), mesh(to_trimesh(design)) {}
-  TriangleMesh design;
-  TriMesh mesh;
-  Partition partition;
-};
-
-// Scene → prepared design → incidence (distance mode, tolerance h) → partition.
-Converted run(const Scene& s) {
-  Converted r(prepare_closed_mesh(s.design, "design", nullptr));
-  std::vector<SolidInput> prepared = s.solids;
-  for (auto& solid : prepared) solid.mesh = prepare_closed_mesh(solid.mesh, solid.name, nullptr);
-  const SolidSet solids(prepared, nullptr);
-  IncidenceOptions options;
-  options.tolerance = s.h;
-  const Incidence incidence = compute_incidence(r.design, solids, options, Context());
-  r.partition = partition(r.mesh, incidence, solids.size(), {}, Context());
-  return r;
-}
-
-// A closed level set with no solids: one organic component, no loops.
-Converted all_organic(const Field& sdf, const Vec3& lo, const Vec3& hi, double h) {
-  const Vec3 origin = lo - Vec3(0.37 * h, 0.29 * h, 0.41 * h);
-  const Vec3 size = (hi - origin) / h;
-  const Eigen::Vector3i cells(static_cast<int>(std::ceil(size.x())) + 1,
-                              static_cast<int>(std::ceil(size.y())) + 1,
-                              static_cast<int>(std::ceil(size.z())) + 1);
-  Converted r(prepare_closed_mesh(extract_level_set(sdf, origin, h, cells), "design", nullptr));
-  Incidence incidence;
-  for (Eigen::Index v = 0; v < r.design.vertices.rows(); ++v) {
-    incidence.offsets.push_back(0);
-    incidence.eroded_seed.push_back(-1);
-  }
-  r.partition = partition(r.mesh, incidence, 0, {}, Context());
-  return r;
-}
 
 Vec3 centroid(const TriMesh& mesh, int f) {
   Vec3 c = Vec3::Zero();
@@ -98,7 +59,7 @@ int count_sign(const CrossField& field, int sign) {
 
 // (1) On the tube's cylinder the cross follows the axis and the circumference.
 TEST(Field, CylinderFollowsAxisAndCircumference) {
-  const Converted r = run(tube_scene(0.03));
+  const Partitioned r = partition_scene(tube_scene(0.03));
   ASSERT_EQ(r.partition.organic_components, 1);
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   double sum = 0, worst = 0;
@@ -131,7 +92,7 @@ TEST(Field, CylinderFollowsAxisAndCircumference) {
 
 // (2) A closed sphere-like component: indices sum to 4χ = 8 quarter turns.
 TEST(Field, SphereIndicesSumToEulerCharacteristic) {
-  const Converted r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
+  const Partitioned r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
                                   Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.06);
   ASSERT_EQ(r.partition.organic_components, 1);
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -149,7 +110,7 @@ TEST(Field, SphereIndicesSumToEulerCharacteristic) {
 
 TEST(Field, EllipsoidIndicesSumToEulerCharacteristic) {
   const Vec3 axes(1.4, 1.0, 0.7);
-  const Converted r =
+  const Partitioned r =
       all_organic([&](const Vec3& p) { return (p.cwiseQuotient(axes).norm() - 1) * 0.7; },
                   -axes * 1.15, axes * 1.15, 0.05);
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -164,7 +125,7 @@ TEST(Field, EllipsoidIndicesSumToEulerCharacteristic) {
 // (3) A disk-like region with a smooth boundary: no singularity on a boundary vertex whose
 // interior angle is flat, and the indices sum to 4χ = 4.
 TEST(Field, DiskHasNoSingularityOnItsBoundary) {
-  const Converted r = run(grown_box_scene(0.04));
+  const Partitioned r = partition_scene(grown_box_scene(0.04));
   ASSERT_EQ(r.partition.organic_components, 1);
   ASSERT_EQ(r.partition.loops.size(), 1u);
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -211,7 +172,7 @@ TEST(Field, DiskHasNoSingularityOnItsBoundary) {
 // A UV ellipsoid (rings of constant latitude, so the equator is a smooth chain of mesh
 // edges) whose southern hemisphere, equator included, is incident with one solid: a
 // hemispherical organic cap bounded by a perfectly smooth circular loop.
-Converted hemisphere_on_a_solid(int rings, int segments, const Vec3& axes) {
+Partitioned hemisphere_on_a_solid(int rings, int segments, const Vec3& axes) {
   std::vector<Vec3> points{Vec3(0, 0, axes.z())};
   for (int i = 1; i < rings; ++i) {
     const double polar = kPi * i / rings;
@@ -242,7 +203,7 @@ Converted hemisphere_on_a_solid(int rings, int segments, const Vec3& axes) {
   for (size_t t = 0; t < triangles.size(); ++t)
     mesh.triangles.row(static_cast<Eigen::Index>(t)) = triangles[t].transpose();
   mesh.triangle_source.resize(triangles.size());
-  Converted r(prepare_closed_mesh(mesh, "uv sphere", nullptr));
+  Partitioned r(prepare_closed_mesh(mesh, "uv sphere", nullptr));
   Incidence incidence;
   for (Eigen::Index v = 0; v < r.design.vertices.rows(); ++v) {
     if (r.design.vertices(v, 2) < 1e-9) incidence.solids.push_back(0);
@@ -259,7 +220,7 @@ Converted hemisphere_on_a_solid(int rings, int segments, const Vec3& axes) {
 // trait of Knöppel's formulation); an ellipsoidal cap, as real designs are, splits them.
 TEST(Field, SmoothDiskBoundaryKeepsSingularitiesInside) {
   for (const Vec3& axes : {Vec3(1, 1, 1), Vec3(1.4, 1.0, 0.8)}) {
-    const Converted r = hemisphere_on_a_solid(48, 96, axes);
+    const Partitioned r = hemisphere_on_a_solid(48, 96, axes);
     ASSERT_EQ(r.partition.organic_components, 1);
     ASSERT_EQ(r.partition.loops.size(), 1u);
     const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -285,7 +246,7 @@ TEST(Field, SmoothDiskBoundaryKeepsSingularitiesInside) {
 // (4) Size field on a sphere of radius r: d = 2·sqrt(2εr − ε²) along both arms, everywhere.
 TEST(Field, SizeFieldOnASphereFollowsEquationSix) {
   const double radius = 1.0;
-  const Converted r =
+  const Partitioned r =
       all_organic([&](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), radius); },
                   Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.05);
   double medians[2];
@@ -324,7 +285,7 @@ TEST(Field, SizeFieldOnASphereFollowsEquationSix) {
 
 // Defaults: ε derived below 2/κ_max, lengths within [min, target], density halves them.
 TEST(Field, SizeFieldDefaultsAreClampedAndScaleWithDensity) {
-  const Converted r = run(tube_scene(0.04));
+  const Partitioned r = partition_scene(tube_scene(0.04));
   FieldOptions options;
   const CrossField one = compute_field(r.mesh, r.partition, options, Context());
   options.density = 2;
@@ -344,7 +305,7 @@ TEST(Field, SizeFieldDefaultsAreClampedAndScaleWithDensity) {
 
 // Debug OBJ: two segments per organic face, one point per singularity.
 TEST(Field, WritesFieldObj) {
-  const Converted r = run(grown_box_scene(0.08));
+  const Partitioned r = partition_scene(grown_box_scene(0.08));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   const std::string path =
       (std::filesystem::temp_directory_path() / "genbrep_field_test.obj").string();
@@ -362,7 +323,7 @@ TEST(Field, WritesFieldObj) {
 }
 
 TEST(Field, RejectsAPartitionOfAnotherMesh) {
-  const Converted r = run(grown_box_scene(0.08));
+  const Partitioned r = partition_scene(grown_box_scene(0.08));
   Partition wrong = r.partition;
   wrong.face_component.pop_back();
   EXPECT_THROW(compute_field(r.mesh, wrong, {}, Context()), Error);
@@ -370,7 +331,7 @@ TEST(Field, RejectsAPartitionOfAnotherMesh) {
 
 // (5) Timing of field + size field on a ~50k-triangle organic region (printed, not asserted).
 TEST(Field, TimingOnFiftyThousandTriangles) {
-  const Converted r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
+  const Partitioned r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
                                   Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.0475);
   const auto start = std::chrono::steady_clock::now();
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());

@@ -17,58 +17,13 @@
 #include "partition/partition.h"
 #include "quad/quad.h"
 #include "relax/relax.h"
+#include "partitioned.h"
 #include "scenes.h"
 
 using namespace genbrep;
 using namespace genbrep::testing;
 
 namespace {
-
-struct Converted {
-  explicit Converted(TriangleMesh prepared)
-      : design(std::move(prepared)), mesh(to_trimesh(design)) {}
-  TriangleMesh design;
-  TriMesh mesh;
-  Partition partition;
-};
-
-Converted run(const Scene& s) {
-  Converted r(prepare_closed_mesh(s.design, "design", nullptr));
-  std::vector<SolidInput> prepared = s.solids;
-  for (auto& solid : prepared) solid.mesh = prepare_closed_mesh(solid.mesh, solid.name, nullptr);
-  const SolidSet solids(prepared, nullptr);
-  IncidenceOptions options;
-  options.tolerance = s.h;
-  const Incidence incidence = compute_incidence(r.design, solids, options, Context());
-  r.partition = partition(r.mesh, incidence, solids.size(), {}, Context());
-  return r;
-}
-
-// The boundary relaxation of §5.3 (relax/) as the pipeline runs it before quad/: smooth
-// loops, so the field has no ± singularity pairs next to voxel zigzags.
-Converted relaxed(const Converted& r) {
-  const Relaxed x = relax(r.design, r.partition, {}, Context());
-  Converted out(x.design);
-  out.partition = x.partition;
-  for (const auto& d : x.diagnostics) std::printf("[relax] %s\n", d.c_str());
-  return out;
-}
-
-Converted all_organic(const Field& sdf, const Vec3& lo, const Vec3& hi, double h) {
-  const Vec3 origin = lo - Vec3(0.37 * h, 0.29 * h, 0.41 * h);
-  const Vec3 size = (hi - origin) / h;
-  const Eigen::Vector3i cells(static_cast<int>(std::ceil(size.x())) + 1,
-                              static_cast<int>(std::ceil(size.y())) + 1,
-                              static_cast<int>(std::ceil(size.z())) + 1);
-  Converted r(prepare_closed_mesh(extract_level_set(sdf, origin, h, cells), "design", nullptr));
-  Incidence incidence;
-  for (Eigen::Index v = 0; v < r.design.vertices.rows(); ++v) {
-    incidence.offsets.push_back(0);
-    incidence.eroded_seed.push_back(-1);
-  }
-  r.partition = partition(r.mesh, incidence, 0, {}, Context());
-  return r;
-}
 
 double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
   const Vec3 ab = b - a;
@@ -77,7 +32,7 @@ double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
 }
 
 // Independent validity check of one cage; returns the number of problems (printed).
-int check_cage(const QuadCage& cage, const Converted& r) {
+int check_cage(const QuadCage& cage, const Partitioned& r) {
   int problems = 0;
   auto fail = [&](const std::string& what) {
     if (problems++ < 10) std::printf("  invalid: %s\n", what.c_str());
@@ -187,7 +142,7 @@ int check_cage(const QuadCage& cage, const Converted& r) {
   return problems;
 }
 
-QuadResult extract_and_check(const std::string& name, const Converted& r, int* problems) {
+QuadResult extract_and_check(const std::string& name, const Partitioned& r, int* problems) {
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   const auto start = std::chrono::steady_clock::now();
   QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
@@ -228,7 +183,7 @@ void expect_targets(const std::string& name, const QuadStats& s) {
 // (run them with --gtest_also_run_disabled_tests).
 
 TEST(Quad, TubeIsAnAnnulusWithTwoChains) {
-  const Converted r = relaxed(run(tube_scene(0.03)));
+  const Partitioned r = relaxed(partition_scene(tube_scene(0.03)));
   int problems = 0;
   const QuadResult result = extract_and_check("tube", r, &problems);
   ASSERT_EQ(result.cages.size(), 1u);
@@ -238,7 +193,7 @@ TEST(Quad, TubeIsAnAnnulusWithTwoChains) {
 }
 
 TEST(Quad, TwoArchesGiveTwoValidCages) {
-  const Converted r = relaxed(run(two_arches_scene(0.05)));
+  const Partitioned r = relaxed(partition_scene(two_arches_scene(0.05)));
   int problems = 0;
   const QuadResult result = extract_and_check("two_arches", r, &problems);
   EXPECT_EQ(problems, 0);
@@ -247,7 +202,7 @@ TEST(Quad, TwoArchesGiveTwoValidCages) {
 }
 
 TEST(Quad, DISABLED_GrownBoxIsADisk) {
-  const Converted r = relaxed(run(grown_box_scene(0.04)));
+  const Partitioned r = relaxed(partition_scene(grown_box_scene(0.04)));
   int problems = 0;
   const QuadResult result = extract_and_check("grown_box", r, &problems);
   ASSERT_EQ(result.cages.size(), 1u);
@@ -256,7 +211,7 @@ TEST(Quad, DISABLED_GrownBoxIsADisk) {
 }
 
 TEST(Quad, DISABLED_ClosedSphereHasEightValenceThreeVertices) {
-  const Converted r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
+  const Partitioned r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
                                   Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.06);
   int problems = 0;
   const QuadResult result = extract_and_check("sphere", r, &problems);
@@ -266,7 +221,7 @@ TEST(Quad, DISABLED_ClosedSphereHasEightValenceThreeVertices) {
 }
 
 TEST(Quad, DISABLED_BoltHole) {
-  const Converted r = relaxed(run(bolt_hole_scene(0.05)));
+  const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
   int problems = 0;
   const QuadResult result = extract_and_check("bolt_hole", r, &problems);
   EXPECT_EQ(problems, 0);
@@ -277,7 +232,7 @@ TEST(Quad, DISABLED_BoltHole) {
 // Where the layout fails (grown_box today, see docs/quad_method.md), the component gets a
 // named failure and no cage; any cage that is returned passes the independent checks.
 TEST(Quad, AFailingComponentIsReportedNotReturnedInvalid) {
-  const Converted r = relaxed(run(grown_box_scene(0.04)));
+  const Partitioned r = relaxed(partition_scene(grown_box_scene(0.04)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   const QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
   EXPECT_EQ(result.cages.size() + result.failures.size(), 1u);
