@@ -8,7 +8,7 @@ MeshPolygon.loop_total (read-only from 4.2), edge creases (MeshEdge.crease in 3.
 import bpy
 import numpy as np
 
-from . import options, props, results
+from . import checks, options, props, results
 
 _LOOP_TOTAL_WRITABLE = not bpy.types.MeshPolygon.bl_rna.properties["loop_total"].is_readonly
 _EDGE_CREASE_PROPERTY = "crease" in bpy.types.MeshEdge.bl_rna.properties
@@ -63,6 +63,51 @@ def gather_input(scene, depsgraph, design_obj):
             solids.append(dict(name=obj.name, role=role, vertices=vertices, faces=faces))
     solids.sort(key=lambda s: s["name"])
     return design, solids
+
+
+def read_cage(obj):
+    """The edited control cage of a cage object (its own mesh, not the subdivided one),
+    in world space, as the dict recompose() takes; raises checks.InputError."""
+    mesh = obj.data
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float64)
+    mesh.vertices.foreach_get("co", co)
+    matrix = np.array(obj.matrix_world, dtype=np.float64)
+    vertices = co.reshape(-1, 3) @ matrix[:3, :3].T + matrix[:3, 3]
+    sizes = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    corners = np.empty(len(mesh.loops), dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", corners)
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    crease = np.zeros(len(mesh.edges), dtype=np.float32)
+    if _EDGE_CREASE_PROPERTY:
+        mesh.edges.foreach_get("crease", crease)
+    elif mesh.attributes.get("crease_edge") is not None:
+        mesh.attributes["crease_edge"].data.foreach_get("value", crease)
+    if np.linalg.det(matrix[:3, :3]) < 0.0:  # mirrored: keep the quads' outward orientation
+        corners = _reverse_polygons(corners, sizes)
+    return checks.cage_input(obj.name, vertices, sizes, corners, edges.reshape(-1, 2), crease)
+
+
+def _reverse_polygons(corners, sizes):
+    out, start = corners.copy(), 0
+    for size in sizes:
+        out[start:start + size] = corners[start:start + size][::-1]
+        start += size
+    return out
+
+
+def replace_mesh_data(obj, vertices, faces):
+    """Give obj a new mesh (vertices in world space), keeping its modifiers and materials."""
+    old = obj.data
+    mesh = new_mesh(old.name, np.asarray(vertices) @ np.linalg.inv(np.array(obj.matrix_world))[:3, :3].T
+                    + np.linalg.inv(np.array(obj.matrix_world))[:3, 3], faces)
+    for material in old.materials:
+        mesh.materials.append(material)
+    obj.data = mesh
+    if old.users == 0:
+        bpy.data.meshes.remove(old)
+    return mesh
 
 
 # writing --------------------------------------------------------------------------------
@@ -306,6 +351,36 @@ def _write_cages(collection, design_name, cages):
         obj.show_wire = True
         written.append(obj)
     return written
+
+
+def cage_objects(collection):
+    """The cage objects of a result collection, in name order."""
+    return sorted((o for o in collection.objects if o.type == "MESH" and " cage " in o.name),
+                  key=lambda o: o.name)
+
+
+def write_recomposed(scene, design_name, cages_in, result, report_json):
+    """After recompose(): the pulled cages replace the edited ones (same objects, modifiers
+    kept) and the composed solid is replaced; returns the composed object or None."""
+    collection = result_collection_existing(design_name)
+    for obj, cage in zip(cages_in, result.get("cages") or []):
+        mesh = replace_mesh_data(obj, cage["vertices"], np.asarray(cage["faces"]).reshape(-1, 4))
+        pairs = np.asarray(cage.get("crease_edges", ()), dtype=np.int32).reshape(-1, 2)
+        if len(pairs):
+            set_edge_creases(mesh, pairs, cage.get("crease_values", ()))
+        shade_smooth(mesh)
+    old = collection.objects.get(results.composed_name(design_name))
+    if old is not None:
+        mesh = old.data
+        bpy.data.objects.remove(old)
+        if mesh.users == 0:
+            bpy.data.meshes.remove(mesh)
+    collection[results.REPORT_PROPERTY] = report_json
+    return _write_composed(collection, design_name, result.get("composed"))
+
+
+def result_collection_existing(design_name):
+    return bpy.data.collections.get(results.collection_name(design_name))
 
 
 def _write_composed(collection, design_name, composed):

@@ -100,3 +100,27 @@ def native_solids(solids):
     """The solids as genbrep_native.convert takes them (lower-case roles)."""
     return [dict(name=s["name"], role=NATIVE_ROLE[s["role"]], vertices=s["vertices"],
                  faces=s["faces"]) for s in solids]
+
+
+def cage_input(name, vertices, polygon_sizes, corner_indices, crease_pairs, crease_values):
+    """The native recompose() dict of one edited cage; raises InputError naming the cage.
+
+    vertices (N, 3) world space; polygon_sizes (K,) corners per polygon; corner_indices the
+    polygons' vertex indices, concatenated. Only creased edges (value > 0) are passed on.
+    """
+    vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    sizes = np.asarray(polygon_sizes, dtype=np.int64).ravel()
+    if len(sizes) == 0:
+        raise InputError(f"cage '{name}' has no faces: undo the edit or convert again")
+    bad = int(np.count_nonzero(sizes != 4))
+    if bad:
+        raise InputError(f"cage '{name}' is not a quad mesh: {bad} faces do not have 4 corners "
+                         f"(a Catmull–Clark cage must stay all quads)")
+    if not np.isfinite(vertices).all():
+        raise InputError(f"cage '{name}' has vertices with NaN or infinite coordinates")
+    values = np.asarray(crease_values, dtype=np.float32).ravel()
+    pairs = np.asarray(crease_pairs, dtype=np.int32).reshape(-1, 2)
+    keep = values > 0
+    return dict(name=name, vertices=vertices,
+                faces=np.asarray(corner_indices, dtype=np.int32).reshape(-1, 4),
+                crease_edges=pairs[keep], crease_values=values[keep])

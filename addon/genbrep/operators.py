@@ -297,20 +297,55 @@ class GENBREP_OT_use_design_grid(bpy.types.Operator):
         return {"FINISHED"}
 
 
+def recompose_now(context, requested_design=""):
+    """Pull and compose again from the cages the user edited; returns an Outcome."""
+    module = native.load()
+    if module is None or not hasattr(module, "recompose"):
+        return Outcome("CANCELLED", "ERROR", "Recompose needs a genbrep_native build with "
+                                             "recompose(): " + " ".join(native.status()[1]))
+    scene = context.scene
+    try:
+        design_name = target_design(context, requested_design)
+        collection = bridge.result_collection_existing(design_name)
+        if collection is None:
+            raise checks.InputError(f"'{design_name}' has no results to recompose: convert it first")
+        cage_objects = bridge.cage_objects(collection)
+        if not cage_objects:
+            raise checks.InputError(f"'{design_name}' has no cages to recompose from: its "
+                                    f"conversion made none (see the report)")
+        cages = [bridge.read_cage(obj) for obj in cage_objects]
+        _, solids = bridge.gather_input(scene, context.evaluated_depsgraph_get(),
+                                        scene.objects[design_name])
+    except checks.InputError as exc:
+        return Outcome("CANCELLED", "ERROR", str(exc))
+    printer = report.ProgressPrinter(("mesh", "compose"), lambda line: print(line, flush=True))
+    try:
+        result = module.recompose(checks.native_solids(solids), cages, {}, printer)
+    except module.ConversionError as exc:
+        return Outcome("CANCELLED", "ERROR", f"Recomposing '{design_name}' failed: {exc}")
+    run_report = result.get("report") or {}
+    composed = bridge.write_recomposed(scene, design_name, cage_objects, result,
+                                       report.to_json(run_report, []))
+    if composed is None:
+        return Outcome("FINISHED", "WARNING", f"Recomposed '{design_name}' from "
+                       f"{len(cages)} cages, but no watertight solid: see the report")
+    return Outcome("FINISHED", "INFO", f"Recomposed '{design_name}' from {len(cages)} cages: "
+                   f"{len(composed.data.polygons)} triangles, closed")
+
+
 class GENBREP_OT_recompose(bpy.types.Operator):
-    """Re-run pull and composition from the edited cages (needs the native compose stage)"""
+    """Pull and compose again from the cages as edited: the composed solid follows the cages"""
     bl_idname = "genbrep.recompose"
     bl_label = "Recompose"
     bl_options = {"REGISTER", "UNDO"}
 
-    @classmethod
-    def poll(cls, context):
-        cls.poll_message_set("Recompose needs the native pull and compose stages, which this "
-                             "genbrep_native build does not have yet")
-        return False
+    design: bpy.props.StringProperty(name="Design", default="",
+                                     description="Design to recompose; empty = the active one")
 
     def execute(self, context):
-        return {"CANCELLED"}
+        outcome = recompose_now(context, self.design)
+        self.report({outcome.level}, outcome.message)
+        return {outcome.status}
 
 
 CLASSES = (GENBREP_OT_set_role, GENBREP_OT_convert, GENBREP_OT_clear_results,

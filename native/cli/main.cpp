@@ -1,4 +1,5 @@
-// cli/main.cpp — `genbrep convert`: files in, report.json and partition.ply out.
+// cli/main.cpp — `genbrep convert`: files in, report.json and partition.ply out;
+// `genbrep compose`: edited cages and the solids in, the recomposed solid out.
 // Thin: parses arguments, reads files, calls pipeline::convert, writes outputs. Bad input
 // exits non-zero with one line naming the file and the problem; it never crashes.
 #include <filesystem>
@@ -18,10 +19,15 @@ const char* kUsage =
     "                       [--seed FILE]... [--tolerance D | --grid OX,OY,OZ,H]\n"
     "                       [--until STAGE] [--target-edge-length L] [--density S]\n"
     "                       [--fitting smooth|tight|boundary_tight] [--field-obj] --out DIR\n"
+    "       genbrep compose --cages FILE [--cages FILE]... [--keep-in FILE]...\n"
+    "                       [--keep-out FILE]... [--seed FILE]... --out DIR\n"
     "       genbrep --version\n"
     "Reads OBJ, PLY, STL or OFF. Writes DIR/report.json, DIR/partition.ply, DIR/relaxed.ply\n"
     "(the design after boundary relaxation, same face properties) and, with\n"
-    "--field-obj, DIR/field.obj (a cross per organic triangle, singularities as points).\n";
+    "--field-obj, DIR/field.obj (a cross per organic triangle, singularities as points).\n"
+    "compose: quad cages (e.g. cage_000.obj from convert, edited) are pulled into the\n"
+    "solids their boundary loops lie on and composed: DIR/composed.obj, composed.ply,\n"
+    "report.json.\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -147,6 +153,51 @@ int run_convert(int argc, char** argv) {
   return 0;
 }
 
+// genbrep compose: recompose(solids, cages) from files; cage names are the file stems.
+int run_compose(int argc, char** argv) {
+  std::vector<SolidInput> solids;
+  std::vector<QuadCage> cages;
+  std::vector<std::string> names;
+  fs::path out;
+  for (int i = 2; i < argc; ++i) {
+    const std::string flag = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw UsageError(flag + " needs a value");
+      return argv[++i];
+    };
+    if (flag == "--cages") {
+      const std::string path = value();
+      names.push_back(fs::path(path).stem().string());
+      cages.push_back(cage_from_polygons(read_polygon_file(path), names.back()));
+    } else if (flag == "--keep-in" || flag == "--keep-out" || flag == "--seed") {
+      const std::string path = value();
+      Role role = flag == "--keep-in" ? Role::KeepIn : flag == "--keep-out" ? Role::KeepOut : Role::Seed;
+      solids.push_back({fs::path(path).stem().string(), role, read_mesh(path)});
+    } else if (flag == "--out") {
+      out = value();
+    } else {
+      throw UsageError("unknown option '" + flag + "' for compose");
+    }
+  }
+  if (cages.empty()) throw UsageError("compose needs at least one --cages FILE");
+  if (solids.empty()) throw UsageError("compose needs the solids (--keep-in, --keep-out, --seed)");
+  if (out.empty()) throw UsageError("--out is required");
+  const Result result = recompose(solids, cages, Options{}, Context(), names);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw Error(Code::FileError, "cannot create '" + out.string() + "': " + ec.message());
+  write_text_file((out / "report.json").string(), result.report_json);
+  std::cout << "wrote " << (out / "report.json").string() << '\n';
+  if (!result.composed.report.ok) {
+    std::cout << "not composed: see the diagnostics in report.json\n";
+    return 1;
+  }
+  write_composed((out / "composed.obj").string(), (out / "composed.ply").string(), result.composed.mesh);
+  std::cout << "wrote " << (out / "composed.obj").string() << " and composed.ply ("
+            << result.composed.mesh.triangles.rows() << " triangles, closed and 2-manifold)\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,6 +212,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (command == "convert") return run_convert(argc, argv);
+    if (command == "compose") return run_compose(argc, argv);
     throw UsageError(command.empty() ? "no command given" : "unknown command '" + command + "'");
   } catch (const UsageError& e) {
     std::cerr << "genbrep: " << e.what() << '\n' << kUsage;

@@ -127,26 +127,56 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 Composed compose(const std::vector<OrganicSheet>& sheets, const SolidSet& solids,
                  const ComposeOptions& options, const Context& context) {
+  std::vector<OrganicSurface> surfaces;
+  for (const auto& sheet : sheets) surfaces.push_back({sheet, std::nullopt, {}});
+  return compose(surfaces, solids, options, context);
+}
+
+Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& solids,
+                 const ComposeOptions& options, const Context& context) {
   Composed out;
   auto& report = out.report;
   double scale = 0;
   for (int s = 0; s < solids.size(); ++s) {
     scale = std::max(scale, bounding_box_diagonal(solids.input(s).mesh.vertices));
   }
-  for (const auto& sheet : sheets) scale = std::max(scale, bounding_box_diagonal(sheet.mesh.vertices));
-  // §7: contact per component.
+  for (const auto& surface : surfaces) {
+    if (surface.sheet.mesh.vertices.rows() > 0) scale = std::max(scale, bounding_box_diagonal(surface.sheet.mesh.vertices));
+    if (surface.cage) scale = std::max(scale, bounding_box_diagonal(surface.cage->vertices));
+  }
+  // §7: contact per component, from its cage when it has one.
   auto start = std::chrono::steady_clock::now();
   std::vector<detail::OrganicCell> cells;
   bool contact_ok = true;
-  for (size_t i = 0; i < sheets.size(); ++i) {
-    context.step(kStage, 0.5 * i / std::max<size_t>(1, sheets.size()));
+  for (size_t i = 0; i < surfaces.size(); ++i) {
+    context.step(kStage, 0.5 * i / std::max<size_t>(1, surfaces.size()));
+    const OrganicSurface& surface = surfaces[i];
+    const bool has_sheet = surface.sheet.mesh.triangles.rows() > 0;
+    if (!surface.cage && !has_sheet) continue;
     detail::OrganicCell cell;
-    out.contacts.push_back(detail::establish(sheets[i], solids, options, &cell));
-    const auto& contact = out.contacts.back();
-    for (const auto& d : contact.diagnostics) report.diagnostics.push_back(d);
-    if (contact.established) {
+    ComponentContact contact;
+    if (surface.cage) {
+      contact = detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, &cell);
+      if (!contact.established && has_sheet) {
+        Diagnostics why = contact.diagnostics;
+        contact = detail::establish(surface.sheet, solids, options, &cell);
+        contact.diagnostics.insert(contact.diagnostics.begin(),
+                                   "organic component " + std::to_string(surface.sheet.component) +
+                                       ": its cage could not be pulled into the solids, composed from "
+                                       "the design region instead");
+        for (size_t k = 0; k < why.size(); ++k) {
+          contact.diagnostics.insert(contact.diagnostics.begin() + 1 + static_cast<long>(k), "  cage: " + why[k]);
+        }
+      }
+    } else {
+      contact = detail::establish(surface.sheet, solids, options, &cell);
+    }
+    out.contacts.push_back(std::move(contact));
+    const auto& added = out.contacts.back();
+    for (const auto& d : added.diagnostics) report.diagnostics.push_back(d);
+    if (added.established) {
       cells.push_back(std::move(cell));
-    } else if (!sheets[i].loops.empty()) {
+    } else if (surface.cage ? !surface.cage->boundary_chains.empty() : !surface.sheet.loops.empty()) {
       contact_ok = false;
     }
   }

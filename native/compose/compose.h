@@ -22,9 +22,11 @@
 // A component whose contact cannot be established (a gap between solids, §9.1) fails
 // the composition with a diagnostic naming the solids and the gap; nothing is hidden.
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/cage.h"
 #include "core/context.h"
 #include "core/error.h"
 #include "core/types.h"
@@ -53,7 +55,9 @@ struct ComponentContact {
   bool established = false;    // pulled and homeomorphic
   bool additive = true;        // Q encloses material (else a bite out of a seed)
   double cell_volume = 0;      // signed volume of Q, design units³
-  OrganicSheet pulled;
+  OrganicSheet pulled;         // the pulled sheet (a cage: its pulled limit tessellation)
+  std::string surface = "design region";  // what was composed: "cage" or "design region"
+  QuadCage cage;               // surface == "cage": the pulled cage (matches `pulled`)
   std::vector<double> max_distance_before;  // per loop: max F on the boundary before the pull
   std::vector<double> max_distance_after;   // and after (≤ η when established)
   std::vector<ContactCurve> curves;
@@ -89,9 +93,27 @@ struct Composed {
 ComponentContact establish_contact(const OrganicSheet& sheet, const SolidSet& solids,
                                    const ComposeOptions& options);
 
+// §7.2–7.3 for a fitted cage (pull/pull_cage on its limit boundary, η doubling until the
+// contact is homeomorphic): contact.cage is the pulled cage, contact.pulled its limit
+// tessellation with one loop per chain (an OrganicSheet compose() accepts as it is: its
+// tessellated boundary is already at F ≤ η). chain_solids[i]: the solids chain i borders.
+ComponentContact establish_cage_contact(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                                        const SolidSet& solids, const ComposeOptions& options);
+
+// The organic surface of one component for compose(): a cage when there is one (pulled
+// as above), else — or when the cage cannot be pulled, with a diagnostic — the sheet.
+// A surface with neither a cage nor sheet triangles is skipped.
+struct OrganicSurface {
+  OrganicSheet sheet;                         // stand-in; no triangles = no fallback
+  std::optional<QuadCage> cage;
+  std::vector<std::vector<int>> chain_solids; // per cage chain: the solids it borders
+};
+
 // §7 then §8 for all sheets. Throws Error{Cancelled} on cancel; everything else is in the
 // report (ok = false and a named diagnostic when the composition cannot be valid).
 Composed compose(const std::vector<OrganicSheet>& sheets, const SolidSet& solids,
+                 const ComposeOptions& options, const Context& context);
+Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& solids,
                  const ComposeOptions& options, const Context& context);
 
 }  // namespace genbrep

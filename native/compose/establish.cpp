@@ -68,6 +68,31 @@ std::string explain(const OrganicSheet& sheet, const SheetLoop& loop, const Soli
 
 ComponentContact detail::establish(const OrganicSheet& sheet, const SolidSet& solids,
                                    const ComposeOptions& options, OrganicCell* cell) {
+  return establish_with(
+      sheet, [&](double eta) { return pull_sheet(sheet, solids, eta, options.pull); }, solids, options, cell);
+}
+
+ComponentContact detail::establish_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                                        const SolidSet& solids, const ComposeOptions& options,
+                                        OrganicCell* cell) {
+  QuadCage last;
+  const OrganicSheet sheet = cage_sheet(cage, chain_solids, options.pull.cage_samples_per_edge);
+  ComponentContact out = establish_with(
+      sheet,
+      [&](double eta) {
+        CagePull pulled = pull_cage(cage, chain_solids, solids, eta, options.pull);
+        last = std::move(pulled.cage);
+        return std::move(pulled.sheet);
+      },
+      solids, options, cell);
+  out.surface = "cage";
+  out.cage = std::move(last);
+  return out;
+}
+
+ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPuller& pull_at,
+                                        const SolidSet& solids, const ComposeOptions& options,
+                                        OrganicCell* cell) {
   ComponentContact out;
   out.component = sheet.component;
   std::set<int> members;
@@ -86,7 +111,7 @@ ComponentContact detail::establish(const OrganicSheet& sheet, const SolidSet& so
   }
   std::string first_problem, last_problem;
   for (int doubling = 0; doubling <= options.max_doublings; ++doubling, eta *= 2) {
-    SheetPull pull = pull_sheet(sheet, solids, eta, options.pull);
+    SheetPull pull = pull_at(eta);
     out.eta = eta;
     out.doublings = doubling;
     out.pulled = pull.sheet;
@@ -134,6 +159,12 @@ ComponentContact establish_contact(const OrganicSheet& sheet, const SolidSet& so
                                    const ComposeOptions& options) {
   detail::OrganicCell cell;
   return detail::establish(sheet, solids, options, &cell);
+}
+
+ComponentContact establish_cage_contact(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                                        const SolidSet& solids, const ComposeOptions& options) {
+  detail::OrganicCell cell;
+  return detail::establish_cage(cage, chain_solids, solids, options, &cell);
 }
 
 }  // namespace genbrep

@@ -16,6 +16,19 @@ const std::vector<std::string>& stage_names() {
 namespace {
 
 // Runs one stage: times it, records it, and attaches the stage name to its errors.
+std::vector<SolidInput> prepare_solids(const std::vector<SolidInput>& inputs, Diagnostics* diagnostics) {
+  std::vector<SolidInput> out;
+  for (const auto& solid : inputs) {
+    SolidInput prepared = solid;
+    const std::string what =
+        std::string(solid.role == Role::KeepIn ? "keep-in" : solid.role == Role::KeepOut ? "keep-out" : "seed") +
+        " '" + solid.name + "'";
+    prepared.mesh = prepare_closed_mesh(solid.mesh, what, diagnostics);
+    out.push_back(std::move(prepared));
+  }
+  return out;
+}
+
 template <typename Fn>
 void run_stage(const std::string& stage, Result* result, const Context& context, Fn&& fn) {
   const auto start = std::chrono::steady_clock::now();
@@ -37,9 +50,16 @@ void run_stage(const std::string& stage, Result* result, const Context& context,
 }  // namespace
 
 std::vector<QuadCage> final_cages(const Result& result) {
-  if (!ran(result, "fit")) return result.quads.cages;
+  if (!ran(result, "fit") && !ran(result, "compose")) return result.quads.cages;
   std::vector<QuadCage> cages;
-  for (const auto& f : result.fitted) cages.push_back(f.cage);
+  for (const auto& f : result.fitted) {
+    cages.push_back(f.cage);
+    for (const auto& contact : result.composed.contacts) {
+      if (contact.component == f.cage.component && contact.surface == "cage" && contact.established) {
+        cages.back() = contact.cage;
+      }
+    }
+  }
   return cages;
 }
 
@@ -102,14 +122,7 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
     result.design = prepare_closed_mesh(inputs.design.mesh, "design '" + inputs.design.name + "'",
                                         &result.diagnostics);
     result.design_validation = validate(result.design);
-    for (const auto& solid : inputs.solids) {
-      SolidInput prepared = solid;
-      const std::string what =
-          std::string(solid.role == Role::KeepIn ? "keep-in" : solid.role == Role::KeepOut ? "keep-out" : "seed") +
-          " '" + solid.name + "'";
-      prepared.mesh = prepare_closed_mesh(solid.mesh, what, &result.diagnostics);
-      result.solids.push_back(std::move(prepared));
-    }
+    result.solids = prepare_solids(inputs.solids, &result.diagnostics);
   });
   if (wanted("incidence")) {
     run_stage("incidence", &result, context, [&] {
@@ -157,11 +170,57 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
   }
   if (wanted("compose")) {
     run_stage("compose", &result, context, [&] {
-      const auto sheets = organic_sheets(result.relaxed.design, result.relaxed.partition);
-      result.composed = compose(sheets, *solids, options.compose, context);
+      // Per component: its pulled fitted cage, the design region as stand-in and fallback.
+      std::vector<OrganicSurface> surfaces;
+      for (auto& sheet : organic_sheets(result.relaxed.design, result.relaxed.partition)) {
+        surfaces.push_back({std::move(sheet), std::nullopt, {}});
+      }
+      for (const Fitted& f : result.fitted) {
+        OrganicSurface& surface = surfaces.at(static_cast<size_t>(f.cage.component));
+        surface.cage = f.cage;
+        for (int loop : f.cage.chain_loop) surface.chain_solids.push_back(result.relaxed.partition.loops[loop].solids);
+      }
+      result.composed = compose(surfaces, *solids, options.compose, context);
     });
   }
   result.report_json = make_report(inputs, options, result);
+  return result;
+}
+
+Result recompose(const std::vector<SolidInput>& solids, const std::vector<QuadCage>& cages,
+                 const Options& options, const Context& context, const std::vector<std::string>& cage_names) {
+  Result result;
+  std::vector<std::string> names;
+  for (size_t i = 0; i < cages.size(); ++i) {
+    names.push_back(i < cage_names.size() ? cage_names[i]
+                                          : "component " + std::to_string(cages[i].component >= 0 ? cages[i].component
+                                                                                                   : static_cast<int>(i)));
+  }
+  run_stage("mesh", &result, context, [&] {
+    GENBREP_CHECK(!cages.empty(), Code::InvalidInput, "recompose needs at least one cage");
+    result.solids = prepare_solids(solids, &result.diagnostics);
+    for (size_t i = 0; i < cages.size(); ++i) {
+      Fitted f;
+      f.cage = with_boundary_chains(cages[i], names[i]);
+      f.cage.component = static_cast<int>(i);
+      f.report.component = static_cast<int>(i);
+      result.fitted.push_back(std::move(f));
+    }
+  });
+  run_stage("compose", &result, context, [&] {
+    const SolidSet set(result.solids, &result.diagnostics);
+    std::vector<OrganicSurface> surfaces;
+    for (size_t i = 0; i < cages.size(); ++i) {
+      OrganicSurface surface;
+      surface.sheet.component = static_cast<int>(i);
+      surface.cage = result.fitted[i].cage;
+      surface.chain_solids = chain_solids_by_proximity(*surface.cage, set, names[i],
+                                                       options.compose.pull.cage_samples_per_edge);
+      surfaces.push_back(std::move(surface));
+    }
+    result.composed = compose(surfaces, set, options.compose, context);
+  });
+  result.report_json = make_recompose_report(solids, names, result);
   return result;
 }
 

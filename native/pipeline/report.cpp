@@ -5,8 +5,92 @@
 
 namespace genbrep {
 
+namespace {
+
+using json = nlohmann::ordered_json;
+
+// The "composed" section: checks measured on the composed mesh, and per component which
+// surface was composed ("cage": the pulled fitted cage; "design region": the stand-in).
+json composed_json(const Result& result) {
+  const ComposeReport& c = result.composed.report;
+  json contacts = json::array();
+  for (const auto& contact : result.composed.contacts) {
+    json entry = {{"component", contact.component},
+                  {"surface", contact.surface},
+                  {"established", contact.established},
+                  {"eta", contact.eta},
+                  {"doublings", contact.doublings},
+                  {"additive", contact.additive},
+                  {"contact_curves", contact.curves.size()},
+                  {"max_distance_before", contact.max_distance_before},
+                  {"max_distance_after", contact.max_distance_after}};
+    if (contact.surface == "cage") {
+      entry["control_points"] = contact.cage.vertices.rows();
+      entry["quads"] = contact.cage.quads.rows();
+    }
+    contacts.push_back(entry);
+  }
+  const double design_volume = result.design_validation.signed_volume;
+  json out = {{"ok", c.ok},
+              {"vertices", c.vertices},
+              {"triangles", c.triangles},
+              {"boundary_edges", c.boundary_edges},
+              {"non_manifold_edges", c.non_manifold_edges},
+              {"non_manifold_vertices", c.non_manifold_vertices},
+              {"inconsistent_edges", c.inconsistent_edges},
+              {"self_intersecting", c.self_intersecting},
+              {"volume", c.volume}};
+  if (design_volume != 0) out["volume_vs_design"] = c.volume / design_volume;
+  out["shells"] = c.shells;
+  out["genus"] = c.genus;
+  out["organic_cells"] = c.organic_cells;
+  out["solid_cells"] = c.solid_cells;
+  out["contacts"] = contacts;
+  return out;
+}
+
+json compose_diagnostics(const Result& result) {
+  json diagnostics = json::array();
+  for (const auto& d : result.composed.report.diagnostics) diagnostics.push_back("compose: " + d);
+  for (const auto& contact : result.composed.contacts) {
+    for (const auto& d : contact.diagnostics) diagnostics.push_back("compose: " + d);
+  }
+  return diagnostics;
+}
+
+}  // namespace
+
+std::string make_recompose_report(const std::vector<SolidInput>& solids,
+                                  const std::vector<std::string>& cage_names, const Result& result) {
+  json report;
+  report["genbrep_version"] = kVersion;
+  report["command"] = "recompose";
+  report["stages_run"] = result.stages_run;
+  json inputs = json::array();
+  for (const auto& s : solids) {
+    inputs.push_back({{"name", s.name}, {"role", role_name(s.role)}, {"triangles", s.mesh.triangles.rows()}});
+  }
+  json cages = json::array();
+  for (size_t i = 0; i < result.fitted.size(); ++i) {
+    const QuadCage& cage = result.fitted[i].cage;
+    cages.push_back({{"name", i < cage_names.size() ? cage_names[i] : ""},
+                     {"component", cage.component},
+                     {"control_points", cage.vertices.rows()},
+                     {"quads", cage.quads.rows()},
+                     {"boundary_loops", cage.boundary_chains.size()}});
+  }
+  report["inputs"] = {{"solids", inputs}, {"cages", cages}};
+  json seconds = json::object();
+  for (const auto& t : result.timings) seconds[t.stage] = t.seconds;
+  report["stages"] = seconds;
+  if (ran(result, "compose")) report["composed"] = composed_json(result);
+  json diagnostics = result.diagnostics;
+  for (const auto& d : compose_diagnostics(result)) diagnostics.push_back(d);
+  report["diagnostics"] = diagnostics;
+  return report.dump(2);
+}
+
 std::string make_report(const Inputs& inputs, const Options& options, const Result& result) {
-  using json = nlohmann::ordered_json;
   json report;
   report["genbrep_version"] = kVersion;
   report["stages_run"] = result.stages_run;
@@ -165,46 +249,14 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     report["cages"] = cages;
     report["cage_failures"] = failures;
   }
-  if (ran(result, "compose")) {
-    const ComposeReport& c = result.composed.report;
-    json contacts = json::array();
-    for (const auto& contact : result.composed.contacts) {
-      contacts.push_back({{"component", contact.component},
-                          {"established", contact.established},
-                          {"eta", contact.eta},
-                          {"doublings", contact.doublings},
-                          {"additive", contact.additive},
-                          {"contact_curves", contact.curves.size()}});
-    }
-    report["composed"] = {{"ok", c.ok},
-                          {"organic_surface", "relaxed design region (stand-in until cages are pulled)"},
-                          {"vertices", c.vertices},
-                          {"triangles", c.triangles},
-                          {"boundary_edges", c.boundary_edges},
-                          {"non_manifold_edges", c.non_manifold_edges},
-                          {"non_manifold_vertices", c.non_manifold_vertices},
-                          {"inconsistent_edges", c.inconsistent_edges},
-                          {"self_intersecting", c.self_intersecting},
-                          {"volume", c.volume},
-                          {"volume_vs_design", result.design_validation.signed_volume != 0
-                                                   ? c.volume / result.design_validation.signed_volume
-                                                   : 0.0},
-                          {"shells", c.shells},
-                          {"genus", c.genus},
-                          {"organic_cells", c.organic_cells},
-                          {"solid_cells", c.solid_cells},
-                          {"contacts", contacts}};
-  }
+  if (ran(result, "compose")) report["composed"] = composed_json(result);
   json diagnostics = result.diagnostics;
   for (const auto& d : result.incidence.diagnostics) diagnostics.push_back(d);
   for (const auto& d : p.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.relaxed.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.field.diagnostics) diagnostics.push_back(d);
   for (const auto& d : result.quads.diagnostics) diagnostics.push_back("quad: " + d);
-  for (const auto& d : result.composed.report.diagnostics) diagnostics.push_back("compose: " + d);
-  for (const auto& contact : result.composed.contacts) {
-    for (const auto& d : contact.diagnostics) diagnostics.push_back("compose: " + d);
-  }
+  for (const auto& d : compose_diagnostics(result)) diagnostics.push_back(d);
   for (const auto& f : result.fitted) {
     for (const auto& d : f.report.diagnostics) diagnostics.push_back("fit: " + d);
   }

@@ -1,6 +1,8 @@
 // pull/pull.cpp — stand-in sheets (§7.1), curve descent (§7.2), interior blending.
 #include "pull/pull.h"
 
+#include "pull/detail/side.h"
+
 #include <algorithm>
 #include <cmath>
 #include <deque>
@@ -221,12 +223,24 @@ bool SheetPull::converged() const {
   return std::all_of(loops.begin(), loops.end(), [](const LoopPull& l) { return l.curve.converged; });
 }
 
-namespace {
+std::vector<std::vector<int>> detail::vertex_adjacency(const TriangleMesh& mesh) {
+  std::vector<std::vector<int>> adjacency(static_cast<size_t>(mesh.vertices.rows()));
+  for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.triangles(f, k), b = mesh.triangles(f, (k + 1) % 3);
+      adjacency[a].push_back(b);
+      adjacency[b].push_back(a);
+    }
+  }
+  for (auto& a : adjacency) {
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  return adjacency;
+}
 
-// σ of a loop (§7.1): on which side of the loop's solids the organic surface lies, from
-// the sheet vertices two and three rings in from the loop (majority, ties outside).
-int organic_side(const OrganicSheet& sheet, const SheetLoop& loop,
-                 const std::vector<std::vector<int>>& adjacency, const SideDistance& d) {
+int detail::organic_side(const OrganicSheet& sheet, const SheetLoop& loop,
+                         const std::vector<std::vector<int>>& adjacency, const SideDistance& d) {
   std::vector<int> ring(adjacency.size(), -1);
   std::deque<int> queue;
   for (int v : loop.vertices) ring[v] = 0, queue.push_back(v);
@@ -245,6 +259,8 @@ int organic_side(const OrganicSheet& sheet, const SheetLoop& loop,
   return inside > outside ? -1 : 1;
 }
 
+namespace {
+
 Vec3 triangle_normal(const Vertices& v, const Triangles& t, int f) {
   const Vec3 a = v.row(t(f, 0)), b = v.row(t(f, 1)), c = v.row(t(f, 2));
   return (b - a).cross(c - a);
@@ -259,25 +275,14 @@ SheetPull pull_sheet(const OrganicSheet& sheet, const SolidSet& solids, double e
   out.eta = eta;
   const Vertices& original = sheet.mesh.vertices;
   const int n = static_cast<int>(original.rows());
-  std::vector<std::vector<int>> adjacency(static_cast<size_t>(n));
-  for (Eigen::Index f = 0; f < sheet.mesh.triangles.rows(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const int a = sheet.mesh.triangles(f, k), b = sheet.mesh.triangles(f, (k + 1) % 3);
-      adjacency[a].push_back(b);
-      adjacency[b].push_back(a);
-    }
-  }
-  for (auto& a : adjacency) {
-    std::sort(a.begin(), a.end());
-    a.erase(std::unique(a.begin(), a.end()), a.end());
-  }
+  const auto adjacency = detail::vertex_adjacency(sheet.mesh);
   // §7.2 on each loop: the polyline through its vertices, sampled along its edges.
   std::vector<Vec3> displacement(static_cast<size_t>(n), Vec3::Zero());
   std::vector<char> on_boundary(static_cast<size_t>(n), 0);
   for (const auto& loop : sheet.loops) {
     LoopPull lp;
     const SideDistance probe(solids, loop.solids, 1);
-    lp.side = organic_side(sheet, loop, adjacency, probe);
+    lp.side = detail::organic_side(sheet, loop, adjacency, probe);
     const SideDistance distance(solids, loop.solids, lp.side);
     std::vector<Vec3> controls;
     for (int v : loop.vertices) controls.push_back(original.row(v).transpose());

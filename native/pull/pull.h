@@ -17,6 +17,7 @@
 #pragma once
 #include <vector>
 
+#include "core/cage.h"
 #include "core/error.h"
 #include "core/types.h"
 #include "incidence/incidence.h"
@@ -89,6 +90,12 @@ struct PullOptions {
   int samples_per_edge = 4;     // stand-in polyline: samples per boundary edge
   int blend_rings = 3;          // interior rings the boundary displacement fades over
   int max_blend_rings = 24;     // rings are doubled up to this while triangles fold
+  // Cages (pull_cage): n, the limit tessellation's segments per cage edge; the boundary is
+  // pulled at those limit samples and at samples_per_edge points on each chord between
+  // them, so the tessellated boundary polyline is inside S, not only the limit curve.
+  int cage_samples_per_edge = 4;
+  int cage_blend_rings = 2;     // rings of the quad graph the boundary move fades over
+  int cage_max_blend_rings = 8; // doubled up to this while a tessellation triangle folds
 };
 
 struct CurvePull {
@@ -125,5 +132,33 @@ struct SheetPull {
 // Pulls every loop of `sheet` to η (< 0) and blends the displacement into the interior.
 SheetPull pull_sheet(const OrganicSheet& sheet, const SolidSet& solids, double eta,
                      const PullOptions& options);
+
+// ---- Cages (§7.2 on the limit boundary of a fitted QuadCage) ----
+
+// The limit surface of `cage` tessellated with `samples_per_edge` segments per cage edge
+// (fit/tessellate_limit) as an OrganicSheet: loops[i] is the tessellation's boundary
+// vertex cycle of cage.boundary_chains[i] (it starts at the chain's first cage vertex and
+// runs in the chain's direction), tagged with chain_solids[i] and partition_loop =
+// cage.chain_loop[i] (or -1). triangle_source = cage quad. Throws Error{Internal} when a
+// chain does not run along the tessellation's boundary (chains and quads disagree).
+OrganicSheet cage_sheet(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                        int samples_per_edge);
+
+struct CagePull {
+  QuadCage cage;   // the pulled cage: boundary control points moved, the move faded inward
+  SheetPull sheet; // its limit tessellation (cage_sheet); loops[i] ↔ chain i; η, per-loop
+                   // descent results, blend rings (of the quad graph), folds, diagnostics
+};
+
+// §7.2 on a cage: per chain, the descent of pull_curve on the exact limit boundary (sample
+// weights from LimitSurface::weights on the chain's boundary edges, so creases and
+// irregular corners are honoured) until F ≤ η everywhere on the tessellated boundary;
+// the move then fades linearly over cage_blend_rings rings of the quad graph (doubled
+// while a tessellation triangle turns over). A blend that moves the boundary again (the
+// limit boundary near irregular vertices can depend on interior points) is re-pulled, at
+// most 3 rounds. chain_solids[i]: the solids chain i borders. σ per chain as for sheets,
+// on the unpulled tessellation.
+CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                   const SolidSet& solids, double eta, const PullOptions& options);
 
 }  // namespace genbrep

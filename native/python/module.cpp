@@ -133,41 +133,83 @@ Options to_options(const py::object& obj) {
   return options;
 }
 
+SolidInput to_solid(const py::handle& obj, size_t i) {
+  const py::dict s = obj.cast<py::dict>();
+  SolidInput solid;
+  solid.name = s.contains("name") ? py::str(s["name"]).cast<std::string>() : "solid " + std::to_string(i);
+  const std::string role = s.contains("role") ? py::str(s["role"]).cast<std::string>() : "";
+  if (!parse_role(role, &solid.role)) {
+    throw Error(Code::InvalidInput, "solid '" + solid.name + "' has role '" + role +
+                                        "'; roles are keep_in, keep_out, seed");
+  }
+  solid.mesh = to_mesh(s, "solid '" + solid.name + "'");
+  return solid;
+}
+
+// The cages to hand on (final_cages: pulled where compose used them) as dicts.
+py::list cages_list(const Result& result) {
+  py::list cages;
+  for (const QuadCage& cage : final_cages(result)) {
+    py::dict c;
+    c["name"] = "component " + std::to_string(cage.component);
+    c["component"] = cage.component;
+    c["vertices"] = matrix_to_array(cage.vertices);
+    c["faces"] = matrix_to_array(cage.quads);
+    std::vector<int> pairs;
+    for (const auto& e : cage.crease_edges) pairs.insert(pairs.end(), e.begin(), e.end());
+    py::array_t<int32_t> crease_edges({static_cast<py::ssize_t>(cage.crease_edges.size()), py::ssize_t(2)});
+    std::copy(pairs.begin(), pairs.end(), crease_edges.mutable_data());
+    c["crease_edges"] = crease_edges;
+    c["crease_values"] = py::array_t<float>(static_cast<py::ssize_t>(cage.crease_values.size()), cage.crease_values.data());
+    py::dict scheme;
+    scheme["boundary_smooth"] = cage.scheme.boundary_smooth_all ? "ALL" : "PRESERVE_CORNERS";
+    scheme["use_limit_surface"] = cage.scheme.use_limit_surface;
+    scheme["quality"] = cage.scheme.quality;
+    scheme["levels"] = cage.scheme.levels;
+    c["subdivision"] = scheme;
+    cages.append(c);
+  }
+  return cages;
+}
+
+py::object composed_dict(const Result& result) {
+  if (!ran(result, "compose") || !result.composed.report.ok) return py::none();
+  py::dict composed;
+  composed["vertices"] = matrix_to_array(result.composed.mesh.vertices);
+  composed["faces"] = matrix_to_array(result.composed.mesh.triangles);
+  composed["face_source"] = vector_to_array(result.composed.mesh.triangle_source);
+  return std::move(composed);
+}
+
+// The progress callback as a native ProgressCallback: it runs on this thread with the GIL
+// re-acquired just for the call; a Python exception inside it cancels the run and is
+// kept in *failure to be re-raised afterwards.
+ProgressCallback progress_callback(const py::object& progress, std::string* failure) {
+  if (progress.is_none()) return {};
+  return [progress, failure](const std::string& stage, double fraction) {
+    py::gil_scoped_acquire acquire;
+    try {
+      const py::object r = progress(stage, fraction);
+      return r.is_none() || r.cast<bool>();
+    } catch (py::error_already_set& e) {
+      *failure = e.what();
+      return false;
+    }
+  };
+}
+
 py::dict convert_py(const py::dict& design, const py::list& solids, const py::object& options_obj,
                     const py::object& progress) {
   Inputs inputs;
   inputs.design.name = design.contains("name") ? py::str(design["name"]).cast<std::string>() : "design";
   inputs.design.mesh = to_mesh(design, "design '" + inputs.design.name + "'");
   for (size_t i = 0; i < solids.size(); ++i) {
-    const py::dict s = solids[i].cast<py::dict>();
-    SolidInput solid;
-    solid.name = s.contains("name") ? py::str(s["name"]).cast<std::string>() : "solid " + std::to_string(i);
-    const std::string role = s.contains("role") ? py::str(s["role"]).cast<std::string>() : "";
-    if (!parse_role(role, &solid.role)) {
-      throw Error(Code::InvalidInput, "solid '" + solid.name + "' has role '" + role +
-                                          "'; roles are keep_in, keep_out, seed");
-    }
-    solid.mesh = to_mesh(s, "solid '" + solid.name + "'");
-    inputs.solids.push_back(std::move(solid));
+    inputs.solids.push_back(to_solid(solids[i], i));
   }
   const Options options = to_options(options_obj);
 
-  // The callback runs on this thread with the GIL re-acquired just for the call. A Python
-  // exception inside it cancels the run and is re-raised afterwards.
   std::string callback_failure;
-  ProgressCallback callback;
-  if (!progress.is_none()) {
-    callback = [&](const std::string& stage, double fraction) {
-      py::gil_scoped_acquire acquire;
-      try {
-        const py::object r = progress(stage, fraction);
-        return r.is_none() || r.cast<bool>();
-      } catch (py::error_already_set& e) {
-        callback_failure = e.what();
-        return false;
-      }
-    };
-  }
+  const ProgressCallback callback = progress_callback(progress, &callback_failure);
   Result result;
   try {
     py::gil_scoped_release release;
@@ -218,37 +260,71 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
   } else {
     out["field"] = py::none();
   }
-  py::list cages;
-  for (const QuadCage& cage : final_cages(result)) {
-    py::dict c;
-    c["name"] = "component " + std::to_string(cage.component);
-    c["component"] = cage.component;
-    c["vertices"] = matrix_to_array(cage.vertices);
-    c["faces"] = matrix_to_array(cage.quads);
-    std::vector<int> pairs;
-    for (const auto& e : cage.crease_edges) pairs.insert(pairs.end(), e.begin(), e.end());
-    py::array_t<int32_t> crease_edges({static_cast<py::ssize_t>(cage.crease_edges.size()), py::ssize_t(2)});
-    std::copy(pairs.begin(), pairs.end(), crease_edges.mutable_data());
-    c["crease_edges"] = crease_edges;
-    c["crease_values"] = py::array_t<float>(static_cast<py::ssize_t>(cage.crease_values.size()), cage.crease_values.data());
-    py::dict scheme;
-    scheme["boundary_smooth"] = cage.scheme.boundary_smooth_all ? "ALL" : "PRESERVE_CORNERS";
-    scheme["use_limit_surface"] = cage.scheme.use_limit_surface;
-    scheme["quality"] = cage.scheme.quality;
-    scheme["levels"] = cage.scheme.levels;
-    c["subdivision"] = scheme;
-    cages.append(c);
+  out["cages"] = cages_list(result);
+  out["composed"] = composed_dict(result);
+  return out;
+}
+
+// A cage dict {name, vertices (n,3), faces (k,4), crease_edges (m,2), crease_values (m)}.
+QuadCage to_cage(const py::handle& obj, size_t i, std::string* name) {
+  const py::dict d = obj.cast<py::dict>();
+  *name = d.contains("name") ? py::str(d["name"]).cast<std::string>() : "cage " + std::to_string(i);
+  const std::string what = "cage '" + *name + "'";
+  if (!d.contains("vertices") || !d.contains("faces")) throw Error(Code::InvalidInput, what + ": needs 'vertices' and 'faces'");
+  PolygonSoup soup;
+  soup.vertices = to_vertices(d["vertices"], what);
+  auto faces = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(d["faces"]);
+  if (!faces || faces.ndim() != 2) throw Error(Code::InvalidInput, what + ": faces must be a K×4 integer array");
+  const py::ssize_t corners = faces.shape(1);
+  for (py::ssize_t f = 0; f < faces.shape(0); ++f) {
+    for (py::ssize_t k = 0; k < corners; ++k) {
+      const int64_t v = faces.at(f, k);
+      if (v < 0 || v > INT32_MAX) throw Error(Code::InvalidInput, what + ": face index " + std::to_string(v) + " is out of range");
+      soup.indices.push_back(static_cast<int>(v));
+    }
+    soup.offsets.push_back(static_cast<int>(soup.indices.size()));
   }
-  out["cages"] = cages;
-  if (ran(result, "compose") && result.composed.report.ok) {
-    py::dict composed;
-    composed["vertices"] = matrix_to_array(result.composed.mesh.vertices);
-    composed["faces"] = matrix_to_array(result.composed.mesh.triangles);
-    composed["face_source"] = vector_to_array(result.composed.mesh.triangle_source);
-    out["composed"] = composed;
-  } else {
-    out["composed"] = py::none();
+  QuadCage cage = cage_from_polygons(soup, *name);
+  if (d.contains("crease_edges") && !d["crease_edges"].is_none()) {
+    auto edges = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(d["crease_edges"]);
+    auto values = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(
+        d.contains("crease_values") ? py::object(d["crease_values"]) : py::object(py::list()));
+    if (!edges || !values || (edges.size() > 0 && (edges.ndim() != 2 || edges.shape(1) != 2)) ||
+        values.size() * 2 != edges.size()) {
+      throw Error(Code::InvalidInput, what + ": crease_edges must be M×2 with M crease_values");
+    }
+    for (py::ssize_t e = 0; e < values.size(); ++e) {
+      cage.crease_edges.push_back({static_cast<int>(edges.data()[2 * e]), static_cast<int>(edges.data()[2 * e + 1])});
+      cage.crease_values.push_back(values.data()[e]);
+    }
   }
+  return cage;
+}
+
+py::dict recompose_py(const py::list& solid_list, const py::list& cage_list, const py::object& options_obj,
+                      const py::object& progress) {
+  std::vector<SolidInput> solids;
+  for (size_t i = 0; i < solid_list.size(); ++i) solids.push_back(to_solid(solid_list[i], i));
+  std::vector<QuadCage> cages;
+  std::vector<std::string> names(cage_list.size());
+  for (size_t i = 0; i < cage_list.size(); ++i) cages.push_back(to_cage(cage_list[i], i, &names[i]));
+  const Options options = to_options(options_obj);
+  std::string callback_failure;
+  const ProgressCallback callback = progress_callback(progress, &callback_failure);
+  Result result;
+  try {
+    py::gil_scoped_release release;
+    result = recompose(solids, cages, options, Context(callback), names);
+  } catch (const Error& e) {
+    if (callback_failure.empty()) throw;
+    throw Error(Code::InvalidInput, "the progress callback raised: " + callback_failure, e.stage());
+  }
+  py::dict out;
+  out["report"] = py::module_::import("json").attr("loads")(result.report_json);
+  py::list cages_out = cages_list(result);
+  for (size_t i = 0; i < cages_out.size() && i < names.size(); ++i) cages_out[i]["name"] = names[i];
+  out["cages"] = cages_out;
+  out["composed"] = composed_dict(result);
   return out;
 }
 
@@ -297,6 +373,18 @@ PYBIND11_MODULE(genbrep_native, m) {
       "design: dict(name, vertices float64 N×3, faces int M×3); solids: list of dict(name,\n"
       "role in keep_in/keep_out/seed, vertices, faces); options: dict(tolerance, incidence,\n"
       "grid_origin, grid_h, until); progress(stage, fraction) -> bool, False cancels.");
+
+  m.def(
+      "recompose",
+      [](const py::list& solids, const py::list& cages, const py::object& options, const py::object& progress) {
+        return guarded([&] { return recompose_py(solids, cages, options, progress); });
+      },
+      py::arg("solids"), py::arg("cages"), py::arg("options") = py::none(), py::arg("progress") = py::none(),
+      "recompose(solids, cages, options=None, progress=None) -> dict(report, composed, cages)\n\n"
+      "Re-composes after cage edits: cages is a list of dict(name, vertices float64 n×3, faces\n"
+      "int k×4, crease_edges m×2 optional, crease_values m optional); each cage's boundary\n"
+      "loops are found from its quads and given the solids nearest to them, then pulled and\n"
+      "composed. 'cages' returns the pulled cages in convert()'s format.");
 
   m.def(
       "read_mesh",

@@ -9,6 +9,7 @@
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "level_set.h"
 #include "mesh/mesh.h"
 #include "partition/partition.h"
+#include "pipeline/pipeline.h"
 #include "pull/pull.h"
 #include "scenes.h"
 
@@ -256,4 +258,147 @@ TEST(Pull, CubicBsplineCurveReproducesItsControlPolygonAverages) {
     }
   }
   EXPECT_NEAR(sum, 1, 1e-15);
+}
+
+// ---- Composition from fitted cages (pipeline) and recompose from edited cages ----
+
+namespace {
+
+// The design is the converted one (recompose has none): volume compares against it.
+Converted from_result(const std::string& name, const Result& result, const TriangleMesh& design) {
+  Converted r;
+  r.name = name;
+  r.design = design;
+  r.solids = result.solids;
+  r.composed = result.composed;
+  return r;
+}
+
+Inputs scene_inputs(const Scene& s) {
+  Inputs in;
+  in.design = {s.name, s.design};
+  in.solids = s.solids;
+  return in;
+}
+
+// Outward unit normal of the cage at vertex v (sum of its quads' corner normals).
+Vec3 cage_normal(const QuadCage& cage, int v) {
+  Vec3 n = Vec3::Zero();
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    for (int k = 0; k < 4; ++k) {
+      if (cage.quads(q, k) != v) continue;
+      const Vec3 p = cage.vertices.row(v), a = cage.vertices.row(cage.quads(q, (k + 1) % 4)),
+                 b = cage.vertices.row(cage.quads(q, (k + 3) % 4));
+      n += (a - p).cross(b - p);
+    }
+  }
+  return n.normalized();
+}
+
+// The interior control point farthest from every solid (the middle of an organic span).
+int farthest_interior_point(const QuadCage& cage, const SolidSet& solids) {
+  std::vector<char> boundary(static_cast<size_t>(cage.vertices.rows()), 0);
+  for (const auto& chain : cage.boundary_chains) for (int v : chain) boundary[v] = 1;
+  int best = -1;
+  double best_d = -1;
+  for (int v = 0; v < cage.vertices.rows(); ++v) {
+    if (boundary[v]) continue;
+    double d = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < solids.size(); ++j) d = std::min(d, solids.surface(j).distance(cage.vertices.row(v).transpose()));
+    if (d > best_d) best_d = d, best = v;
+  }
+  return best;
+}
+
+}  // namespace
+
+class ComposeFromCages : public ::testing::TestWithParam<int> {};
+
+TEST_P(ComposeFromCages, PulledCagesComposeAWatertightSolid) {
+  const Scene s = GetParam() == 0 ? tube_scene(0.05) : two_arches_scene(0.05);
+  const Result result = convert(scene_inputs(s), Options{}, Context());
+  ASSERT_FALSE(result.fitted.empty()) << s.name;
+  expect_valid(from_result(s.name + "/cages", result, result.design));
+  const auto report = nlohmann::json::parse(result.report_json);
+  for (const auto& contact : result.composed.contacts) {
+    bool fitted = false;
+    for (const auto& f : result.fitted) fitted = fitted || f.cage.component == contact.component;
+    EXPECT_EQ(contact.surface, fitted ? "cage" : "design region") << s.name << joined(contact.diagnostics);
+    EXPECT_TRUE(contact.established) << s.name << joined(contact.diagnostics);
+    for (double after : contact.max_distance_after) EXPECT_LE(after, contact.eta) << s.name;
+    std::printf("[cages] %s component %d: %s, eta=%.3g (%d doublings), %d curves, max F before %.3g after %.3g\n",
+                s.name.c_str(), contact.component, contact.surface.c_str(), contact.eta, contact.doublings,
+                static_cast<int>(contact.curves.size()),
+                *std::max_element(contact.max_distance_before.begin(), contact.max_distance_before.end()),
+                *std::max_element(contact.max_distance_after.begin(), contact.max_distance_after.end()));
+  }
+  // final_cages hands on the pulled cages: same topology as the fitted ones.
+  const auto cages = final_cages(result);
+  ASSERT_EQ(cages.size(), result.fitted.size());
+  for (size_t i = 0; i < cages.size(); ++i) EXPECT_EQ(cages[i].quads, result.fitted[i].cage.quads);
+  for (const auto& c : report["composed"]["contacts"]) EXPECT_TRUE(c.contains("surface"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, ComposeFromCages, ::testing::Values(0, 1));
+
+TEST(Recompose, EditedCageChangesTheVolumeTheExpectedWay) {
+  const Scene s = tube_scene(0.05);
+  const Result converted = convert(scene_inputs(s), Options{}, Context());
+  std::vector<QuadCage> cages = final_cages(converted);
+  ASSERT_EQ(cages.size(), 1u);
+  const Result same = recompose(s.solids, cages, Options{}, Context());
+  expect_valid(from_result("tube/recomposed", same, converted.design));
+  // Move the middle control point outward by h / 2: an additive surface gains volume.
+  const SolidSet solids(converted.solids, nullptr);
+  const int v = farthest_interior_point(cages[0], solids);
+  ASSERT_GE(v, 0);
+  cages[0].vertices.row(v) += 0.5 * s.h * cage_normal(cages[0], v).transpose();
+  const Result edited = recompose(s.solids, cages, Options{}, Context());
+  expect_valid(from_result("tube/edited", edited, converted.design));
+  ASSERT_EQ(edited.composed.contacts.size(), 1u);
+  EXPECT_EQ(edited.composed.contacts[0].surface, "cage");
+  EXPECT_TRUE(edited.composed.contacts[0].additive);
+  std::printf("[recompose] tube: convert %.5f, recomposed %.5f, control point %d moved out by %.3f: %.5f\n",
+              converted.composed.report.volume, same.composed.report.volume, v, 0.5 * s.h,
+              edited.composed.report.volume);
+  EXPECT_NEAR(same.composed.report.volume, converted.composed.report.volume, 1e-3 * converted.composed.report.volume);
+  EXPECT_GT(edited.composed.report.volume, same.composed.report.volume);
+}
+
+TEST(Recompose, OpenOrNonQuadCagesAreNamed) {
+  const Scene s = tube_scene(0.05);
+  const Result converted = convert(scene_inputs(s), Options{}, Context());
+  const std::vector<QuadCage> cages = final_cages(converted);
+  ASSERT_EQ(cages.size(), 1u);
+  // Non-quad: a cage read from polygons with a pentagon and two triangles.
+  PolygonSoup soup;
+  soup.vertices = Vertices::Random(6, 3);
+  for (const std::vector<int>& face : {std::vector<int>{0, 1, 2, 3, 4}, {0, 1, 5}, {1, 2, 5}, {2, 3, 4, 5}}) {
+    soup.indices.insert(soup.indices.end(), face.begin(), face.end());
+    soup.offsets.push_back(static_cast<int>(soup.indices.size()));
+  }
+  try {
+    cage_from_polygons(soup, "component 2");
+    FAIL() << "non-quad cage accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "cage 'component 2' is not a quad mesh: 2 faces have 3 corners, 1 face has 5 corners");
+  }
+  // Open: delete the quad farthest from the solids: its hole is a boundary loop on no solid.
+  const SolidSet solids(converted.solids, nullptr);
+  QuadCage holed = cages[0];
+  const int v = farthest_interior_point(holed, solids);
+  Eigen::Index drop = -1;
+  for (Eigen::Index q = 0; q < holed.quads.rows() && drop < 0; ++q) {
+    for (int k = 0; k < 4; ++k) drop = holed.quads(q, k) == v ? q : drop;
+  }
+  Quads kept(holed.quads.rows() - 1, 4);
+  for (Eigen::Index q = 0, r = 0; q < holed.quads.rows(); ++q) if (q != drop) kept.row(r++) = holed.quads.row(q);
+  holed.quads = kept;
+  try {
+    recompose(s.solids, {holed}, Options{}, Context());
+    FAIL() << "open cage accepted";
+  } catch (const Error& e) {
+    std::printf("[recompose] %s\n", e.what());
+    EXPECT_EQ(std::string(e.what()).rfind("cage 'component 0' is open: its boundary loop", 0), 0u) << e.what();
+  }
 }

@@ -179,3 +179,30 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
     EXPECT_EQ(run.err.rfind("genbrep: ", 0), 0u) << run.err;
   }
 }
+
+TEST(Cli, ComposeRecomposesFromTheCagesConvertWrote) {
+  const fs::path dir = temp_dir("compose");
+  const Scene s = tube_scene(0.06);
+  const std::string scene = write_scene(s, dir);
+  const CliRun converted = run_cli("convert " + scene + " --out " + (dir / "out").string(), dir);
+  ASSERT_EQ(converted.exit_code, 0) << converted.err;
+  ASSERT_TRUE(fs::exists(dir / "out" / "cage_000.obj"));
+  const std::string solids = scene.substr(scene.find(" --", 1));  // the solid flags
+  const CliRun composed = run_cli("compose --cages " + (dir / "out" / "cage_000.obj").string() + solids +
+                                      " --out " + (dir / "again").string(), dir);
+  ASSERT_EQ(composed.exit_code, 0) << composed.err;
+  ASSERT_TRUE(fs::exists(dir / "again" / "composed.obj"));
+  ASSERT_TRUE(fs::exists(dir / "again" / "composed.ply"));
+  const auto first = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
+  const auto second = nlohmann::json::parse(std::ifstream(dir / "again" / "report.json"));
+  EXPECT_TRUE(second["composed"]["ok"].get<bool>()) << second["diagnostics"];
+  EXPECT_EQ(second["composed"]["contacts"][0]["surface"], "cage");
+  EXPECT_EQ(second["inputs"]["cages"][0]["name"], "cage_000");
+  EXPECT_NEAR(second["composed"]["volume"].get<double>(), first["composed"]["volume"].get<double>(),
+              1e-3 * first["composed"]["volume"].get<double>());
+  // A cage that is not a quad mesh is named in one line.
+  std::ofstream(dir / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const CliRun bad = run_cli("compose --cages " + (dir / "tri.obj").string() + solids + " --out " + (dir / "bad").string(), dir);
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("cage 'tri' is not a quad mesh: 1 face has 3 corners"), std::string::npos) << bad.err;
+}

@@ -384,3 +384,16 @@ def test_field_crosses_lie_in_each_face_and_are_perpendicular():
     assert np.allclose(np.sum(arms * normals, axis=1), 0)          # in the face plane
     assert np.allclose(np.sum(arms[0::2] * arms[1::2], axis=1), 0)  # arms perpendicular
     assert np.allclose(arms[0] / np.linalg.norm(arms[0]), [1, 0, 0])
+
+
+def test_cage_input_keeps_quads_and_creased_edges_and_names_bad_cages():
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], float)
+    cage = checks.cage_input("c", vertices, [4, 4], [0, 1, 2, 3, 1, 4, 5, 2],
+                             [[0, 1], [1, 2], [4, 5]], [0.0, 1.0, 0.5])
+    assert cage["faces"].shape == (2, 4)
+    assert cage["crease_edges"].tolist() == [[1, 2], [4, 5]]
+    assert cage["crease_values"].tolist() == [1.0, 0.5]
+    with pytest.raises(checks.InputError, match="cage 'c' is not a quad mesh: 1 faces"):
+        checks.cage_input("c", vertices, [4, 3], [0, 1, 2, 3, 1, 4, 5], [], [])
+    with pytest.raises(checks.InputError, match="cage 'c' has no faces"):
+        checks.cage_input("c", vertices, [], [], [], [])

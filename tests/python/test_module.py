@@ -153,3 +153,28 @@ def test_validate_mesh_counts(native):
     assert counts["boundary_edges"] == 3 and not counts["closed_manifold"]
     counts = native.validate_mesh(v, np.vstack([f, [[0, 3, 2]]]))
     assert counts["closed_manifold"] and counts["signed_volume"] == pytest.approx(1 / 6)
+
+
+def test_recompose_from_the_converted_cages(native, scenes):
+    design, solids, (origin, h), _ = load_scene(native, scenes / "tube")
+    result = native.convert(design, solids, {"tolerance": h})
+    assert [c["surface"] for c in result["report"]["composed"]["contacts"]] == ["cage"]
+    cages = [{k: c[k] for k in ("name", "vertices", "faces", "crease_edges", "crease_values")}
+             for c in result["cages"]]
+    again = native.recompose(solids, cages)
+    assert again["report"]["composed"]["ok"], again["report"]["diagnostics"]
+    counts = native.validate_mesh(again["composed"]["vertices"], again["composed"]["faces"])
+    assert counts["closed_manifold"] and counts["signed_volume"] > 0
+    volume = result["report"]["composed"]["volume"]
+    assert abs(counts["signed_volume"] - volume) < 1e-3 * volume
+    assert [c["name"] for c in again["cages"]] == [c["name"] for c in cages]
+    assert again["cages"][0]["faces"].shape == cages[0]["faces"].shape
+    # Errors name the cage: triangles instead of quads, and a hole away from every solid.
+    triangles = dict(cages[0], faces=np.array([[0, 1, 2]] * 3))
+    with pytest.raises(native.ConversionError, match=r"cage 'component 0' is not a quad mesh: 3 faces have 3 corners"):
+        native.recompose(solids, [triangles])
+    vertices, faces = cages[0]["vertices"], cages[0]["faces"]
+    middle = np.argmin(np.linalg.norm(vertices[faces].mean(axis=1) - vertices.mean(axis=0), axis=1))
+    holed = dict(cages[0], faces=np.delete(faces, middle, axis=0))
+    with pytest.raises(native.ConversionError, match=r"cage 'component 0' is open: its boundary loop"):
+        native.recompose(solids, [holed])

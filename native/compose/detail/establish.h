@@ -1,5 +1,7 @@
 // compose/detail/establish.h — establish_contact that also hands over the organic cell.
 #pragma once
+#include <functional>
+
 #include "compose/compose.h"
 #include "compose/detail/exact.h"
 
@@ -8,5 +10,15 @@ namespace genbrep::detail {
 // §7.2–7.3 for one sheet; on success *cell is Q_c (and T_c) for the composition.
 ComponentContact establish(const OrganicSheet& sheet, const SolidSet& solids,
                            const ComposeOptions& options, OrganicCell* cell);
+
+// The η-doubling loop with any pull: `pull(η)` returns the pulled sheet (same loops as
+// `sheet`, the unpulled surface that sets η₀ and names the gaps).
+using SheetPuller = std::function<SheetPull(double eta)>;
+ComponentContact establish_with(const OrganicSheet& sheet, const SheetPuller& pull, const SolidSet& solids,
+                                const ComposeOptions& options, OrganicCell* cell);
+
+// The same for a cage (pull_cage); contact.cage is the pulled cage that was established.
+ComponentContact establish_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                                const SolidSet& solids, const ComposeOptions& options, OrganicCell* cell);
 
 }  // namespace genbrep::detail

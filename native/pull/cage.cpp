@@ -1,0 +1,242 @@
+// pull/cage.cpp — §7.2 on a fitted cage: pull the limit boundary of every chain into its
+// solids, fade the move into the quad graph, tessellate the limit surface as the sheet.
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <map>
+
+#include "fit/fit.h"
+#include "pull/detail/side.h"
+#include "pull/pull.h"
+
+namespace genbrep {
+
+namespace {
+
+// (quad, k) per directed cage edge a→b: the quad whose corner k is a and k+1 is b.
+std::map<std::pair<int, int>, std::pair<int, int>> directed_edges(const Quads& quads) {
+  std::map<std::pair<int, int>, std::pair<int, int>> out;
+  for (Eigen::Index q = 0; q < quads.rows(); ++q) {
+    for (int k = 0; k < 4; ++k) out[{quads(q, k), quads(q, (k + 1) % 4)}] = {static_cast<int>(q), k};
+  }
+  return out;
+}
+
+// Quad parameters of the point at fraction t along the quad's edge k (fit/'s convention).
+void edge_uv(int k, double t, double* u, double* v) {
+  const double us[4] = {t, 1, 1 - t, 0}, vs[4] = {0, t, 1, 1 - t};
+  *u = us[k];
+  *v = vs[k];
+}
+
+// The curve of one chain over all cage control points: the limit points at t = j/n on
+// each chain edge and `sub` points on each chord between consecutive ones (the polyline
+// the tessellation shows). Weights below 1e-14 (cancelled phantom points) are dropped.
+BoundaryCurve chain_curve(const LimitSurface& surface, const std::vector<int>& chain,
+                          const std::map<std::pair<int, int>, std::pair<int, int>>& edges, int n, int sub) {
+  std::vector<LimitWeights> limit;  // limit samples along the whole chain
+  for (size_t i = 0; i < chain.size(); ++i) {
+    const auto it = edges.find({chain[i], chain[(i + 1) % chain.size()]});
+    GENBREP_CHECK(it != edges.end(), Code::Internal, "a boundary chain edge is not a cage edge");
+    for (int j = 0; j < n; ++j) {
+      double u, v;
+      edge_uv(it->second.second, static_cast<double>(j) / n, &u, &v);
+      limit.push_back(surface.weights(it->second.first, u, v));
+    }
+  }
+  BoundaryCurve curve;
+  curve.control_count = surface.control_point_count();
+  for (size_t s = 0; s < limit.size(); ++s) {
+    const LimitWeights& a = limit[s];
+    const LimitWeights& b = limit[(s + 1) % limit.size()];
+    for (int m = 0; m < sub; ++m) {
+      const double t = static_cast<double>(m) / sub;
+      std::map<int, double> w;
+      for (const auto& [i, x] : a) w[i] += (1 - t) * x;
+      for (const auto& [i, x] : b) w[i] += t * x;
+      for (const auto& [i, x] : w) {
+        if (std::abs(x) < 1e-14) continue;
+        curve.controls.push_back(i);
+        curve.weights.push_back(x);
+      }
+      curve.offsets.push_back(static_cast<int>(curve.controls.size()));
+    }
+  }
+  return curve;
+}
+
+Vec3 triangle_normal(const TriangleMesh& m, Eigen::Index f) {
+  const Vec3 a = m.vertices.row(m.triangles(f, 0)), b = m.vertices.row(m.triangles(f, 1)),
+             c = m.vertices.row(m.triangles(f, 2));
+  return (b - a).cross(c - a);
+}
+
+}  // namespace
+
+OrganicSheet cage_sheet(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                        int samples_per_edge) {
+  const int n = std::max(1, samples_per_edge);
+  OrganicSheet sheet;
+  sheet.component = cage.component;
+  sheet.mesh = tessellate_limit(cage, n);
+  // Boundary halfedges of the tessellation (used by one triangle), tail → head.
+  std::map<std::pair<int, int>, int> count;
+  for (Eigen::Index f = 0; f < sheet.mesh.triangles.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) ++count[{sheet.mesh.triangles(f, k), sheet.mesh.triangles(f, (k + 1) % 3)}];
+  }
+  std::map<int, int> next;
+  for (const auto& [e, c] : count) {
+    if (count.count({e.second, e.first}) == 0) next[e.first] = e.second;
+  }
+  // Cage corners come first in the tessellation: a chain's vertex i is tessellation vertex i.
+  for (size_t c = 0; c < cage.boundary_chains.size(); ++c) {
+    const auto& chain = cage.boundary_chains[c];
+    SheetLoop loop;
+    loop.solids = c < chain_solids.size() ? chain_solids[c] : std::vector<int>{};
+    loop.partition_loop = c < cage.chain_loop.size() ? cage.chain_loop[c] : -1;
+    int v = chain.empty() ? -1 : chain[0];
+    for (size_t i = 0; i < chain.size(); ++i) {
+      GENBREP_CHECK(v == chain[i], Code::Internal,
+                    "cage chain " + std::to_string(c) + " does not follow the limit tessellation's boundary");
+      for (int j = 0; j < n; ++j) {
+        loop.vertices.push_back(v);
+        const auto it = next.find(v);
+        GENBREP_CHECK(it != next.end(), Code::Internal, "a cage chain vertex is not on the tessellation's boundary");
+        v = it->second;
+      }
+    }
+    GENBREP_CHECK(chain.empty() || v == chain[0], Code::Internal, "a cage chain does not close on the tessellation");
+    sheet.loops.push_back(std::move(loop));
+  }
+  return sheet;
+}
+
+CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                   const SolidSet& solids, double eta, const PullOptions& options) {
+  GENBREP_CHECK(chain_solids.size() == cage.boundary_chains.size(), Code::Internal,
+                "pull_cage needs the solids of every boundary chain");
+  const int n = std::max(1, options.cage_samples_per_edge);
+  const int n_points = static_cast<int>(cage.vertices.rows());
+  LimitSurface surface(cage);
+  const auto edges = directed_edges(cage.quads);
+  const OrganicSheet original_sheet = cage_sheet(cage, chain_solids, n);
+  const auto adjacency = detail::vertex_adjacency(original_sheet.mesh);
+  // Per chain: σ, the distance F = σ·D_S and the sampled limit boundary.
+  std::vector<int> sides;
+  std::vector<SideDistance> distances;
+  std::vector<BoundaryCurve> curves;
+  for (size_t c = 0; c < cage.boundary_chains.size(); ++c) {
+    const SideDistance probe(solids, chain_solids[c], 1);
+    sides.push_back(detail::organic_side(original_sheet, original_sheet.loops[c], adjacency, probe));
+    distances.emplace_back(solids, chain_solids[c], sides.back());
+    curves.push_back(chain_curve(surface, cage.boundary_chains[c], edges, n, std::max(1, options.samples_per_edge)));
+  }
+  // The quad graph and its rings from the chains (ring 0: chain vertices and anything the
+  // descent moved).
+  std::vector<std::vector<int>> neighbours(static_cast<size_t>(n_points));
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      neighbours[a].push_back(b);
+      neighbours[b].push_back(a);
+    }
+  }
+  const Vertices& original = cage.vertices;
+  std::vector<Vec3> controls(static_cast<size_t>(n_points));
+  for (int i = 0; i < n_points; ++i) controls[i] = original.row(i).transpose();
+  CagePull out;
+  out.cage = cage;
+  out.sheet.eta = eta;
+  std::vector<CurvePull> results(curves.size());
+  for (int round = 0; round < 3; ++round) {
+    for (size_t c = 0; c < curves.size(); ++c) {
+      const CurvePull r = pull_curve(curves[c], distances[c], eta, options, &controls);
+      if (round == 0) results[c].max_before = r.max_before;
+      results[c].iterations += r.iterations;
+    }
+    // Ring 0 and its displacement; BFS rings over the quad graph.
+    std::vector<int> ring(static_cast<size_t>(n_points), -1);
+    std::deque<int> queue;
+    for (const auto& chain : cage.boundary_chains) {
+      for (int v : chain) if (ring[v] < 0) ring[v] = 0, queue.push_back(v);
+    }
+    for (int v = 0; v < n_points; ++v) {
+      if (ring[v] < 0 && (controls[v] - original.row(v).transpose()).squaredNorm() > 0) ring[v] = 0, queue.push_back(v);
+    }
+    while (!queue.empty()) {
+      const int v = queue.front();
+      queue.pop_front();
+      for (int u : neighbours[v]) if (ring[u] < 0) ring[u] = ring[v] + 1, queue.push_back(u);
+    }
+    // Linear fade over k rings as in pull_sheet; k doubles while a limit triangle folds.
+    for (int k = std::max(1, options.cage_blend_rings);; k *= 2) {
+      std::vector<Vec3> move(static_cast<size_t>(n_points), Vec3::Zero());
+      for (int v = 0; v < n_points; ++v) {
+        if (ring[v] == 0) move[v] = controls[v] - original.row(v).transpose();
+      }
+      for (int r = 1; r <= k; ++r) {
+        const double factor = (1.0 - r / (k + 1.0)) / (1.0 - (r - 1) / (k + 1.0));
+        for (int v = 0; v < n_points; ++v) {
+          if (ring[v] != r) continue;
+          Vec3 sum = Vec3::Zero();
+          int count = 0;
+          for (int u : neighbours[v]) if (ring[u] == r - 1) sum += move[u], ++count;
+          move[v] = factor * sum / std::max(1, count);
+        }
+      }
+      out.cage.vertices = original;
+      for (int v = 0; v < n_points; ++v) out.cage.vertices.row(v) += move[v].transpose();
+      surface.set_control_points(out.cage.vertices);
+      const TriangleMesh moved = surface.tessellate(n);
+      int folded = 0;
+      for (Eigen::Index f = 0; f < moved.triangles.rows(); ++f) {
+        folded += triangle_normal(original_sheet.mesh, f).dot(triangle_normal(moved, f)) <= 0;
+      }
+      out.sheet.blend_rings = k;
+      out.sheet.folded_triangles = folded;
+      if (folded == 0 || 2 * k > options.cage_max_blend_rings) break;
+    }
+    // The blend may have moved the limit boundary (interior points in its support): check.
+    for (int i = 0; i < n_points; ++i) controls[i] = out.cage.vertices.row(i).transpose();
+    bool inside = true;
+    PullOptions measure = options;
+    measure.max_iterations = 0;
+    for (size_t c = 0; c < curves.size(); ++c) {
+      std::vector<Vec3> copy = controls;
+      const CurvePull check = pull_curve(curves[c], distances[c], eta, measure, &copy);
+      results[c].converged = check.converged;
+      results[c].max_after = check.max_after;
+      results[c].stuck_samples = check.stuck_samples;
+      inside = inside && check.converged;
+    }
+    if (inside) break;
+  }
+  // The pulled cage's sheet and the per-chain results.
+  out.sheet.sheet = cage_sheet(out.cage, chain_solids, n);
+  for (size_t c = 0; c < curves.size(); ++c) {
+    LoopPull lp;
+    lp.side = sides[c];
+    lp.curve = results[c];
+    for (int v : cage.boundary_chains[c]) {
+      lp.max_displacement = std::max(lp.max_displacement, (out.cage.vertices.row(v) - original.row(v)).norm());
+    }
+    for (int s : lp.curve.stuck_samples) {
+      Vec3 p = Vec3::Zero();
+      for (int k = curves[c].offsets[s]; k < curves[c].offsets[s + 1]; ++k) {
+        p += curves[c].weights[k] * controls[curves[c].controls[k]];
+      }
+      lp.stuck_points.push_back(p);
+    }
+    out.sheet.loops.push_back(std::move(lp));
+  }
+  if (out.sheet.folded_triangles > 0) {
+    out.sheet.diagnostics.push_back("cage of organic component " + std::to_string(cage.component) + ": " +
+                                    std::to_string(out.sheet.folded_triangles) +
+                                    " limit triangles fold after the pull even with " +
+                                    std::to_string(out.sheet.blend_rings) + " blend rings");
+  }
+  return out;
+}
+
+}  // namespace genbrep
