@@ -89,11 +89,9 @@ Command parse(int argc, char** argv) {
     } else if (flag == "--density") {
       cmd.options.field.density = parse_number(value(), flag);
     } else if (flag == "--fitting") {
-      const std::string name = value();
-      if (name == "smooth") cmd.options.fit.strategy = FitStrategy::Smooth;
-      else if (name == "tight") cmd.options.fit.strategy = FitStrategy::Tight;
-      else if (name == "boundary_tight") cmd.options.fit.strategy = FitStrategy::BoundaryTight;
-      else throw UsageError("--fitting expects smooth, tight or boundary_tight");
+      if (!parse_strategy(value(), &cmd.options.fit.strategy)) {
+        throw UsageError("--fitting expects smooth, tight or boundary_tight");
+      }
     } else if (flag == "--field-obj") {
       cmd.field_obj = true;
     } else if (flag == "--until") {

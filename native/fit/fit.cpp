@@ -28,6 +28,16 @@ const char* strategy_name(FitStrategy strategy) {
   return "?";
 }
 
+bool parse_strategy(const std::string& name, FitStrategy* strategy) {
+  for (FitStrategy s : {FitStrategy::Smooth, FitStrategy::Tight, FitStrategy::BoundaryTight}) {
+    if (name == strategy_name(s)) {
+      *strategy = s;
+      return true;
+    }
+  }
+  return false;
+}
+
 namespace {
 
 using Sparse = Eigen::SparseMatrix<double>;

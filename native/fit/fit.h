@@ -39,6 +39,7 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -107,6 +108,8 @@ TriangleMesh tessellate_limit(const QuadCage& cage, int samples_per_edge);
 
 enum class FitStrategy { Smooth, Tight, BoundaryTight };
 const char* strategy_name(FitStrategy strategy);  // "smooth", "tight", "boundary_tight"
+// The inverse of strategy_name; false for any other name.
+bool parse_strategy(const std::string& name, FitStrategy* strategy);
 
 struct FitOptions {
   FitStrategy strategy = FitStrategy::Smooth;

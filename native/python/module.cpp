@@ -120,10 +120,9 @@ Options to_options(const py::object& obj) {
       if (!(options.field.density > 0)) throw Error(Code::InvalidInput, "option size_scale must be positive");
     } else if (key == "fitting") {
       const std::string name = value.cast<std::string>();
-      if (name == "smooth") options.fit.strategy = FitStrategy::Smooth;
-      else if (name == "tight") options.fit.strategy = FitStrategy::Tight;
-      else if (name == "boundary_tight") options.fit.strategy = FitStrategy::BoundaryTight;
-      else throw Error(Code::InvalidInput, "option fitting must be smooth, tight or boundary_tight, got '" + name + "'");
+      if (!parse_strategy(name, &options.fit.strategy)) {
+        throw Error(Code::InvalidInput, "option fitting must be smooth, tight or boundary_tight, got '" + name + "'");
+      }
     } else if (key == "until") {
       options.until = value.is_none() ? "" : value.cast<std::string>();
     } else {
@@ -198,6 +197,21 @@ ProgressCallback progress_callback(const py::object& progress, std::string* fail
   };
 }
 
+// Runs native work with the GIL released and progress going to `progress`. A Python
+// exception inside the callback cancels the run and is re-raised as the reason.
+template <typename Work>
+Result run_released(const py::object& progress, Work&& work) {
+  std::string callback_failure;
+  const ProgressCallback callback = progress_callback(progress, &callback_failure);
+  try {
+    py::gil_scoped_release release;
+    return work(Context(callback));
+  } catch (const Error& e) {
+    if (callback_failure.empty()) throw;
+    throw Error(Code::InvalidInput, "the progress callback raised: " + callback_failure, e.stage());
+  }
+}
+
 py::dict convert_py(const py::dict& design, const py::list& solids, const py::object& options_obj,
                     const py::object& progress) {
   Inputs inputs;
@@ -208,16 +222,9 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
   }
   const Options options = to_options(options_obj);
 
-  std::string callback_failure;
-  const ProgressCallback callback = progress_callback(progress, &callback_failure);
-  Result result;
-  try {
-    py::gil_scoped_release release;
-    result = convert(inputs, options, Context(callback));
-  } catch (const Error& e) {
-    if (callback_failure.empty()) throw;
-    throw Error(Code::InvalidInput, "the progress callback raised: " + callback_failure, e.stage());
-  }
+  const Result result = run_released(progress, [&](const Context& context) {
+    return convert(inputs, options, context);
+  });
   py::dict out;
   out["report"] = py::module_::import("json").attr("loads")(result.report_json);
   py::dict d;
@@ -309,16 +316,9 @@ py::dict recompose_py(const py::list& solid_list, const py::list& cage_list, con
   std::vector<std::string> names(cage_list.size());
   for (size_t i = 0; i < cage_list.size(); ++i) cages.push_back(to_cage(cage_list[i], i, &names[i]));
   const Options options = to_options(options_obj);
-  std::string callback_failure;
-  const ProgressCallback callback = progress_callback(progress, &callback_failure);
-  Result result;
-  try {
-    py::gil_scoped_release release;
-    result = recompose(solids, cages, options, Context(callback), names);
-  } catch (const Error& e) {
-    if (callback_failure.empty()) throw;
-    throw Error(Code::InvalidInput, "the progress callback raised: " + callback_failure, e.stage());
-  }
+  const Result result = run_released(progress, [&](const Context& context) {
+    return recompose(solids, cages, options, context, names);
+  });
   py::dict out;
   out["report"] = py::module_::import("json").attr("loads")(result.report_json);
   py::list cages_out = cages_list(result);
