@@ -8,67 +8,26 @@
 #include <pybind11/stl.h>
 
 #include "fit/fit.h"
+#include "python/arrays.h"
 
 namespace py = pybind11;
 using namespace genbrep;
+using genbrep::python::matrix_to_array;
+using genbrep::python::to_indices;
+using genbrep::python::to_vertices;
 
 namespace {
 
-[[noreturn]] void raise_conversion_error(const Error& e) {
-  // Looked up at call time: module.cpp creates the exception type.
-  const py::object type = py::module_::import("genbrep_native").attr("ConversionError");
-  py::object instance = type(e.what());
-  instance.attr("code") = code_name(e.code());
-  instance.attr("stage") = e.stage().empty() ? std::string("fit") : e.stage();
-  PyErr_SetObject(type.ptr(), instance.ptr());
-  throw py::error_already_set();
-}
-
+// Fit errors without a stage of their own are reported as the fit stage's.
 template <typename Fn>
 auto guarded(Fn&& fn) {
-  try {
-    return fn();
-  } catch (const Error& e) {
-    raise_conversion_error(e);
-  }
-}
-
-Vertices array_to_vertices(const py::handle& obj, const std::string& what) {
-  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
-  if (!a || a.ndim() != 2 || a.shape(1) != 3) {
-    throw Error(Code::InvalidInput, what + " must be an N×3 float array");
-  }
-  Vertices v(a.shape(0), 3);
-  std::copy(a.data(), a.data() + a.size(), v.data());
-  return v;
-}
-
-template <int Columns>
-Eigen::Matrix<int, Eigen::Dynamic, Columns, Eigen::RowMajor> array_to_indices(
-    const py::handle& obj, const std::string& what) {
-  auto a = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(obj);
-  if (!a || a.ndim() != 2 || a.shape(1) != Columns) {
-    throw Error(Code::InvalidInput,
-                what + " must be an M×" + std::to_string(Columns) + " integer array");
-  }
-  Eigen::Matrix<int, Eigen::Dynamic, Columns, Eigen::RowMajor> m(a.shape(0), Columns);
-  for (py::ssize_t i = 0; i < a.size(); ++i) {
-    const int64_t value = a.data()[i];
-    if (value < 0 || value > INT32_MAX) {
-      throw Error(Code::InvalidInput,
-                  what + ": index " + std::to_string(value) + " is out of range");
+  return python::guarded([&] {
+    try {
+      return fn();
+    } catch (const Error& e) {
+      throw e.with_stage("fit");
     }
-    m.data()[i] = static_cast<int>(value);
-  }
-  return m;
-}
-
-template <typename Matrix>
-py::array to_array(const Matrix& m) {
-  using Scalar = typename Matrix::Scalar;
-  py::array_t<Scalar> out({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
-  std::copy(m.data(), m.data() + m.size(), out.mutable_data());
-  return std::move(out);
+  });
 }
 
 bool parse_boundary_smooth(const std::string& name) {
@@ -83,13 +42,13 @@ QuadCage to_cage(const py::object& vertices, const py::object& quads,
                  const std::string& boundary_smooth, int quality, const py::object& crease_edges,
                  const py::object& crease_values) {
   QuadCage cage;
-  cage.vertices = array_to_vertices(vertices, "cage vertices");
-  cage.quads = array_to_indices<4>(quads, "cage quads");
+  cage.vertices = to_vertices(vertices, "cage vertices");
+  cage.quads = to_indices<4>(quads, "cage quads");
   cage.scheme.boundary_smooth_all = parse_boundary_smooth(boundary_smooth);
   if (quality < 1 || quality > 10) throw Error(Code::InvalidInput, "quality must be in 1..10");
   cage.scheme.quality = quality;
   if (!crease_edges.is_none()) {
-    const auto edges = array_to_indices<2>(crease_edges, "crease edges");
+    const auto edges = to_indices<2>(crease_edges, "crease edges");
     const auto values =
         py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(crease_values);
     if (!values || values.ndim() != 1 || values.shape(0) != edges.rows()) {
@@ -149,7 +108,7 @@ void bind_fit(py::module_& m) {
             py::gil_scoped_release release;
             mesh = tessellate_limit(cage, samples_per_edge);
           }
-          return py::make_tuple(to_array(mesh.vertices), to_array(mesh.triangles));
+          return py::make_tuple(matrix_to_array(mesh.vertices), matrix_to_array(mesh.triangles));
         });
       },
       py::arg("vertices"), py::arg("quads"), py::arg("samples_per_edge"),
@@ -177,11 +136,11 @@ void bind_fit(py::module_& m) {
           cage.chain_loop.resize(chains.size());
           for (size_t i = 0; i < chains.size(); ++i) cage.chain_loop[i] = static_cast<int>(i);
           TriangleMesh region;
-          region.vertices = array_to_vertices(region_vertices, "region vertices");
-          region.triangles = array_to_indices<3>(region_faces, "region faces");
+          region.vertices = to_vertices(region_vertices, "region vertices");
+          region.triangles = to_indices<3>(region_faces, "region faces");
           std::vector<std::vector<Vec3>> curves;
           for (const auto& curve : boundary_curves) {
-            const Vertices c = array_to_vertices(curve, "boundary curve");
+            const Vertices c = to_vertices(curve, "boundary curve");
             curves.emplace_back();
             for (Eigen::Index i = 0; i < c.rows(); ++i)
               curves.back().push_back(c.row(i).transpose());
@@ -198,8 +157,8 @@ void bind_fit(py::module_& m) {
             fitted = fit_cage(cage, region, curves, options, Context());
           }
           py::dict out;
-          out["vertices"] = to_array(fitted.cage.vertices);
-          out["quads"] = to_array(fitted.cage.quads);
+          out["vertices"] = matrix_to_array(fitted.cage.vertices);
+          out["quads"] = matrix_to_array(fitted.cage.quads);
           out["boundary_chains"] = fitted.cage.boundary_chains;
           out["report"] = report_to_dict(fitted.report);
           return out;

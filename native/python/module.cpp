@@ -7,73 +7,26 @@
 #include <pybind11/stl.h>
 
 #include "mesh/mesh.h"
+#include "python/arrays.h"
 #include "pipeline/pipeline.h"
 
 namespace py = pybind11;
 using namespace genbrep;
+using namespace genbrep::python;
 
 namespace {
 
 PyObject* g_conversion_error = nullptr;
 PyObject* g_cancelled_error = nullptr;
 
-void raise_error(const Error& e) {
-  PyObject* type = e.code() == Code::Cancelled ? g_cancelled_error : g_conversion_error;
-  py::object instance = py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", e.what()));
-  if (!instance) throw py::error_already_set();
-  instance.attr("code") = code_name(e.code());
-  instance.attr("stage") = e.stage();
-  PyErr_SetObject(type, instance.ptr());
-}
-
-Vertices to_vertices(const py::handle& obj, const std::string& what) {
-  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
-  if (!a || a.ndim() != 2 || a.shape(1) != 3) {
-    throw Error(Code::InvalidInput, what + ": vertices must be an N×3 float array");
-  }
-  Vertices v(a.shape(0), 3);
-  std::copy(a.data(), a.data() + a.size(), v.data());
-  return v;
-}
-
-Triangles to_triangles(const py::handle& obj, const std::string& what) {
-  auto a = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(obj);
-  if (!a || a.ndim() != 2 || a.shape(1) != 3) {
-    throw Error(Code::InvalidInput, what + ": faces must be an M×3 integer array of triangles");
-  }
-  Triangles t(a.shape(0), 3);
-  for (py::ssize_t i = 0; i < a.size(); ++i) {
-    const int64_t value = a.data()[i];
-    if (value < 0 || value > INT32_MAX) {
-      throw Error(Code::InvalidInput, what + ": face index " + std::to_string(value) + " is out of range");
-    }
-    t.data()[i] = static_cast<int>(value);
-  }
-  return t;
-}
-
 TriangleMesh to_mesh(const py::dict& d, const std::string& what) {
   if (!d.contains("vertices") || !d.contains("faces")) {
     throw Error(Code::InvalidInput, what + ": needs 'vertices' and 'faces'");
   }
   TriangleMesh mesh;
-  mesh.vertices = to_vertices(d["vertices"], what);
-  mesh.triangles = to_triangles(d["faces"], what);
+  mesh.vertices = to_vertices(d["vertices"], what + ": vertices");
+  mesh.triangles = to_indices<3>(d["faces"], what + ": faces");
   return mesh;
-}
-
-template <typename Matrix>
-py::array matrix_to_array(const Matrix& m) {
-  using Scalar = typename Matrix::Scalar;
-  py::array_t<Scalar> out({static_cast<py::ssize_t>(m.rows()), static_cast<py::ssize_t>(m.cols())});
-  std::copy(m.data(), m.data() + m.size(), out.mutable_data());
-  return std::move(out);
-}
-
-py::array_t<int32_t> vector_to_array(const std::vector<int>& v) {
-  py::array_t<int32_t> out(static_cast<py::ssize_t>(v.size()));
-  std::copy(v.begin(), v.end(), out.mutable_data());
-  return out;
 }
 
 py::dict partition_dict(const Partition& partition) {
@@ -279,7 +232,7 @@ QuadCage to_cage(const py::handle& obj, size_t i, std::string* name) {
   const std::string what = "cage '" + *name + "'";
   if (!d.contains("vertices") || !d.contains("faces")) throw Error(Code::InvalidInput, what + ": needs 'vertices' and 'faces'");
   PolygonSoup soup;
-  soup.vertices = to_vertices(d["vertices"], what);
+  soup.vertices = to_vertices(d["vertices"], what + ": vertices");
   auto faces = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(d["faces"]);
   if (!faces || faces.ndim() != 2) throw Error(Code::InvalidInput, what + ": faces must be a K×4 integer array");
   const py::ssize_t corners = faces.shape(1);
@@ -328,18 +281,20 @@ py::dict recompose_py(const py::list& solid_list, const py::list& cage_list, con
   return out;
 }
 
-// Wraps a call so genbrep::Error surfaces as ConversionError with code and stage.
-template <typename Fn>
-auto guarded(Fn&& fn) {
-  try {
-    return fn();
-  } catch (const Error& e) {
-    raise_error(e);
-    throw py::error_already_set();
-  }
+}  // namespace
+
+namespace genbrep::python {
+
+void set_python_error(const Error& e) {
+  PyObject* type = e.code() == Code::Cancelled ? g_cancelled_error : g_conversion_error;
+  py::object instance = py::reinterpret_steal<py::object>(PyObject_CallFunction(type, "s", e.what()));
+  if (!instance) throw py::error_already_set();
+  instance.attr("code") = code_name(e.code());
+  instance.attr("stage") = e.stage();
+  PyErr_SetObject(type, instance.ptr());
 }
 
-}  // namespace
+}  // namespace genbrep::python
 
 void bind_fit(py::module_& m);  // fit_bindings.cpp: limit_points, fit_cage
 
@@ -401,8 +356,8 @@ PYBIND11_MODULE(genbrep_native, m) {
       [](const py::object& vertices, const py::object& faces) {
         return guarded([&] {
           TriangleMesh mesh;
-          mesh.vertices = to_vertices(vertices, "mesh");
-          mesh.triangles = to_triangles(faces, "mesh");
+          mesh.vertices = to_vertices(vertices, "mesh: vertices");
+          mesh.triangles = to_indices<3>(faces, "mesh: faces");
           const MeshValidation v = validate(mesh);
           py::dict d;
           d["vertices"] = v.vertices;
