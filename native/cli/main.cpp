@@ -37,6 +37,20 @@ TriangleMesh read_mesh(const std::string& path) {
   return triangulate(read_polygon_file(path), "'" + path + "'");
 }
 
+// --keep-in, --keep-out and --seed name a solid file of that role.
+bool solid_flag(const std::string& flag, Role* role) {
+  if (flag == "--keep-in") *role = Role::KeepIn;
+  else if (flag == "--keep-out") *role = Role::KeepOut;
+  else if (flag == "--seed") *role = Role::Seed;
+  else return false;
+  return true;
+}
+
+// A solid named after its file's stem, as messages and the report name it.
+SolidInput read_solid(const std::string& path, Role role) {
+  return {fs::path(path).stem().string(), role, read_mesh(path)};
+}
+
 double parse_number(const std::string& text, const std::string& flag) {
   try {
     size_t used = 0;
@@ -67,10 +81,8 @@ Command parse(int argc, char** argv) {
       const std::string path = value();
       cmd.inputs.design = {fs::path(path).stem().string(), read_mesh(path)};
       have_design = true;
-    } else if (flag == "--keep-in" || flag == "--keep-out" || flag == "--seed") {
-      const std::string path = value();
-      Role role = flag == "--keep-in" ? Role::KeepIn : flag == "--keep-out" ? Role::KeepOut : Role::Seed;
-      cmd.inputs.solids.push_back({fs::path(path).stem().string(), role, read_mesh(path)});
+    } else if (Role role; solid_flag(flag, &role)) {
+      cmd.inputs.solids.push_back(read_solid(value(), role));
     } else if (flag == "--tolerance") {
       cmd.options.incidence.tolerance = parse_number(value(), flag);
       have_tolerance = true;
@@ -167,10 +179,8 @@ int run_compose(int argc, char** argv) {
       const std::string path = value();
       names.push_back(fs::path(path).stem().string());
       cages.push_back(cage_from_polygons(read_polygon_file(path), names.back()));
-    } else if (flag == "--keep-in" || flag == "--keep-out" || flag == "--seed") {
-      const std::string path = value();
-      Role role = flag == "--keep-in" ? Role::KeepIn : flag == "--keep-out" ? Role::KeepOut : Role::Seed;
-      solids.push_back({fs::path(path).stem().string(), role, read_mesh(path)});
+    } else if (Role role; solid_flag(flag, &role)) {
+      solids.push_back(read_solid(value(), role));
     } else if (flag == "--out") {
       out = value();
     } else {

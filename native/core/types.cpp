@@ -11,6 +11,13 @@ const char* role_name(Role role) {
   return "keep_in";
 }
 
+std::string describe(const SolidInput& solid) {
+  const char* role = solid.role == Role::KeepIn    ? "keep-in"
+                     : solid.role == Role::KeepOut ? "keep-out"
+                                                   : "seed";
+  return std::string(role) + " '" + solid.name + "'";
+}
+
 bool parse_role(const std::string& name, Role* role) {
   if (name == "keep_in" || name == "keep-in") *role = Role::KeepIn;
   else if (name == "keep_out" || name == "keep-out") *role = Role::KeepOut;

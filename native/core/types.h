@@ -53,4 +53,7 @@ struct SolidInput {
   TriangleMesh mesh;
 };
 
+// "keep-in 'boss'": how messages name a solid.
+std::string describe(const SolidInput& solid);
+
 }  // namespace genbrep

@@ -99,10 +99,6 @@ SolidSet::SolidSet(std::vector<SolidInput> solids, Diagnostics* diagnostics)
   for (int i = 0; i < n; ++i) group_[i] = groups.find(i);
 }
 
-std::string SolidSet::describe(int solid) const {
-  const auto& s = solids_[solid];
-  const char* role = s.role == Role::KeepIn ? "keep-in" : s.role == Role::KeepOut ? "keep-out" : "seed";
-  return std::string(role) + " '" + s.name + "'";
-}
+std::string SolidSet::describe(int solid) const { return genbrep::describe(solids_[solid]); }
 
 }  // namespace genbrep

@@ -20,10 +20,7 @@ std::vector<SolidInput> prepare_solids(const std::vector<SolidInput>& inputs, Di
   std::vector<SolidInput> out;
   for (const auto& solid : inputs) {
     SolidInput prepared = solid;
-    const std::string what =
-        std::string(solid.role == Role::KeepIn ? "keep-in" : solid.role == Role::KeepOut ? "keep-out" : "seed") +
-        " '" + solid.name + "'";
-    prepared.mesh = prepare_closed_mesh(solid.mesh, what, diagnostics);
+    prepared.mesh = prepare_closed_mesh(solid.mesh, describe(solid), diagnostics);
     out.push_back(std::move(prepared));
   }
   return out;
