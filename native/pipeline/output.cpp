@@ -2,6 +2,8 @@
 
 #include <cstdint>
 #include <fstream>
+#include <utility>
+#include <vector>
 
 namespace genbrep {
 namespace {
@@ -17,6 +19,47 @@ void put(std::ofstream& out, T value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));  // x86/ARM: little-endian
 }
 
+// An OBJ of the faces' rows (triangles or quads), 1-based, full double precision.
+template <typename Faces>
+void write_obj(const std::string& path, const std::string& comment, const Vertices& vertices,
+               const Faces& faces) {
+  auto out = open_for_writing(path, std::ios::out | std::ios::trunc);
+  out.precision(17);
+  if (!comment.empty()) out << "# " << comment << "\n";
+  for (Eigen::Index v = 0; v < vertices.rows(); ++v) {
+    out << "v " << vertices(v, 0) << ' ' << vertices(v, 1) << ' ' << vertices(v, 2) << '\n';
+  }
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    out << 'f';
+    for (Eigen::Index k = 0; k < faces.cols(); ++k) out << ' ' << faces(f, k) + 1;
+    out << '\n';
+  }
+  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+}
+
+// A binary PLY of a triangle mesh with one int face property per entry of `properties`
+// (name, one value per triangle).
+void write_labelled_ply(const std::string& path, const std::string& comment, const TriangleMesh& mesh,
+                        const std::vector<std::pair<std::string, const std::vector<int>*>>& properties) {
+  auto out = open_for_writing(path, std::ios::out | std::ios::binary | std::ios::trunc);
+  out << "ply\nformat binary_little_endian 1.0\ncomment " << comment << "\n"
+      << "element vertex " << mesh.vertices.rows() << "\n"
+      << "property double x\nproperty double y\nproperty double z\n"
+      << "element face " << mesh.triangles.rows() << "\n"
+      << "property list uchar int vertex_indices\n";
+  for (const auto& property : properties) out << "property int " << property.first << "\n";
+  out << "end_header\n";
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
+    for (int k = 0; k < 3; ++k) put<double>(out, mesh.vertices(v, k));
+  }
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
+    put<uint8_t>(out, 3);
+    for (int k = 0; k < 3; ++k) put<int32_t>(out, mesh.triangles(t, k));
+    for (const auto& property : properties) put<int32_t>(out, (*property.second)[t]);
+  }
+  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+}
+
 }  // namespace
 
 void write_text_file(const std::string& path, const std::string& text) {
@@ -26,65 +69,19 @@ void write_text_file(const std::string& path, const std::string& text) {
 }
 
 void write_cage_obj(const std::string& path, const QuadCage& cage) {
-  auto out = open_for_writing(path, std::ios::out | std::ios::trunc);
-  out.precision(17);
-  out << "# genbrep cage of organic component " << cage.component << "\n";
-  for (Eigen::Index v = 0; v < cage.vertices.rows(); ++v) {
-    out << "v " << cage.vertices(v, 0) << ' ' << cage.vertices(v, 1) << ' ' << cage.vertices(v, 2) << '\n';
-  }
-  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
-    out << "f " << cage.quads(q, 0) + 1 << ' ' << cage.quads(q, 1) + 1 << ' ' << cage.quads(q, 2) + 1 << ' '
-        << cage.quads(q, 3) + 1 << '\n';
-  }
-  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+  write_obj(path, "genbrep cage of organic component " + std::to_string(cage.component), cage.vertices,
+            cage.quads);
 }
 
 void write_composed(const std::string& obj_path, const std::string& ply_path, const TriangleMesh& mesh) {
-  auto obj = open_for_writing(obj_path, std::ios::out | std::ios::trunc);
-  obj.precision(17);
-  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
-    obj << "v " << mesh.vertices(v, 0) << ' ' << mesh.vertices(v, 1) << ' ' << mesh.vertices(v, 2) << '\n';
-  }
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
-    obj << "f " << mesh.triangles(t, 0) + 1 << ' ' << mesh.triangles(t, 1) + 1 << ' ' << mesh.triangles(t, 2) + 1 << '\n';
-  }
-  if (!obj) throw Error(Code::FileError, "cannot write '" + obj_path + "'", "output");
-  auto ply = open_for_writing(ply_path, std::ios::out | std::ios::binary | std::ios::trunc);
-  ply << "ply\nformat binary_little_endian 1.0\ncomment genbrep composed solid\n"
-      << "element vertex " << mesh.vertices.rows() << "\n"
-      << "property double x\nproperty double y\nproperty double z\n"
-      << "element face " << mesh.triangles.rows() << "\n"
-      << "property list uchar int vertex_indices\nproperty int source\nend_header\n";
-  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
-    for (int k = 0; k < 3; ++k) put<double>(ply, mesh.vertices(v, k));
-  }
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
-    put<uint8_t>(ply, 3);
-    for (int k = 0; k < 3; ++k) put<int32_t>(ply, mesh.triangles(t, k));
-    put<int32_t>(ply, mesh.triangle_source[t]);
-  }
-  if (!ply) throw Error(Code::FileError, "cannot write '" + ply_path + "'", "output");
+  write_obj(obj_path, "", mesh.vertices, mesh.triangles);
+  write_labelled_ply(ply_path, "genbrep composed solid", mesh, {{"source", &mesh.triangle_source}});
 }
 
 void write_partition_ply(const std::string& path, const TriangleMesh& design,
                          const Partition& partition) {
-  auto out = open_for_writing(path, std::ios::out | std::ios::binary | std::ios::trunc);
-  out << "ply\nformat binary_little_endian 1.0\ncomment genbrep partition\n"
-      << "element vertex " << design.vertices.rows() << "\n"
-      << "property double x\nproperty double y\nproperty double z\n"
-      << "element face " << design.triangles.rows() << "\n"
-      << "property list uchar int vertex_indices\nproperty int solid\nproperty int component\n"
-      << "end_header\n";
-  for (Eigen::Index v = 0; v < design.vertices.rows(); ++v) {
-    for (int k = 0; k < 3; ++k) put<double>(out, design.vertices(v, k));
-  }
-  for (Eigen::Index t = 0; t < design.triangles.rows(); ++t) {
-    put<uint8_t>(out, 3);
-    for (int k = 0; k < 3; ++k) put<int32_t>(out, design.triangles(t, k));
-    put<int32_t>(out, partition.face_solid[t]);
-    put<int32_t>(out, partition.face_component[t]);
-  }
-  if (!out) throw Error(Code::FileError, "cannot write '" + path + "'", "output");
+  write_labelled_ply(path, "genbrep partition", design,
+                     {{"solid", &partition.face_solid}, {"component", &partition.face_component}});
 }
 
 }  // namespace genbrep
