@@ -53,9 +53,10 @@ MeshValidation validate(const TriangleMesh& mesh);
 
 // The checks every input passes before incidence: weld, validate, flip an inside-out
 // surface (reported in `diagnostics`), and throw Error{InvalidInput} for anything else.
-// `what` names the object in messages, e.g. "keep-in 'boss'".
+// `what` names the object in messages, e.g. "keep-in 'boss'". `validation`, if given,
+// receives the counts of the returned mesh (so callers need not validate it again).
 TriangleMesh prepare_closed_mesh(const TriangleMesh& mesh, const std::string& what,
-                                 Diagnostics* diagnostics);
+                                 Diagnostics* diagnostics, MeshValidation* validation = nullptr);
 
 // Halfedge mesh of a prepared (closed, manifold, oriented) mesh; vertex and face indices
 // are the array indices. Throws Error{Internal} if OpenMesh rejects a face.

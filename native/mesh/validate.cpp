@@ -114,7 +114,7 @@ MeshValidation validate(const TriangleMesh& mesh) {
 }
 
 TriangleMesh prepare_closed_mesh(const TriangleMesh& input, const std::string& what,
-                                 Diagnostics* diagnostics) {
+                                 Diagnostics* diagnostics, MeshValidation* validation) {
   if (input.triangles.rows() == 0 || input.vertices.rows() == 0) {
     throw Error(Code::InvalidInput, what + " is empty: it has no triangles", "mesh");
   }
@@ -175,11 +175,13 @@ TriangleMesh prepare_closed_mesh(const TriangleMesh& input, const std::string& w
     diagnostics->push_back(what + ": " + std::to_string(check.zero_area_triangles) +
                            " zero-area triangles kept");
   }
+  if (validation) *validation = check;
   if (check.signed_volume < 0) {
     // Every shell is consistently oriented but the whole encloses negative volume:
     // the file is inside out. Turning it is the only reading that makes it a solid.
     for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) std::swap(mesh.triangles(t, 1), mesh.triangles(t, 2));
     if (diagnostics) diagnostics->push_back(what + " was inside out; its triangles were flipped");
+    if (validation) validation->signed_volume = -check.signed_volume;  // the flip's only effect
   }
   return mesh;
 }

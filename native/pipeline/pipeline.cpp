@@ -117,8 +117,7 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
   std::unique_ptr<SolidSet> solids;
   run_stage("mesh", &result, context, [&] {
     result.design = prepare_closed_mesh(inputs.design.mesh, "design '" + inputs.design.name + "'",
-                                        &result.diagnostics);
-    result.design_validation = validate(result.design);
+                                        &result.diagnostics, &result.design_validation);
     result.solids = prepare_solids(inputs.solids, &result.diagnostics);
   });
   if (wanted("incidence")) {

@@ -180,3 +180,16 @@ TEST(MeshHalfedge, ConvertsWithSameIndices) {
   // Euler characteristic of a sphere-like closed surface.
   EXPECT_EQ(static_cast<int>(mesh.n_vertices() - mesh.n_edges() + mesh.n_faces()), 2);
 }
+
+TEST(MeshPrepare, ReportsTheValidationOfWhatItReturns) {
+  TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(2, 1, 1), 2);
+  for (Eigen::Index t = 0; t < box.triangles.rows(); ++t) std::swap(box.triangles(t, 1), box.triangles(t, 2));
+  MeshValidation reported;
+  const TriangleMesh prepared = prepare_closed_mesh(box, "seed 's'", nullptr, &reported);
+  const MeshValidation fresh = validate(prepared);
+  EXPECT_EQ(reported.triangles, fresh.triangles);
+  EXPECT_EQ(reported.shells, fresh.shells);
+  EXPECT_EQ(reported.boundary_edges, fresh.boundary_edges);
+  EXPECT_DOUBLE_EQ(reported.signed_volume, fresh.signed_volume);
+  EXPECT_NEAR(reported.signed_volume, 2.0, 1e-12);
+}
