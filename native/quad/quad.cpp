@@ -140,41 +140,98 @@ QuadResult extract_cages(const TriMesh& design, const Partition& partition,
 
 namespace {
 
-// One component: layout, quantization, filling. Throws Error{StageFailure} when the
-// layout cannot be quantized or the filled cage is invalid.
+// One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
+// when the layout cannot be quantized or the filled cage is invalid.
+void extract_once(const TriMesh& design, const Partition& partition, const CrossField& field,
+                  const QuadOptions& options, int c, QuadCage* cage, QuadStats* stats,
+                  Diagnostics* diagnostics) {
+  const auto start = std::chrono::steady_clock::now();
+  const quad_detail::Surface surface(design, partition, field, c);
+  quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
+  quad_detail::trace_separatrices(surface, layout, options, *diagnostics);
+  quad_detail::PatchLayout patches =
+      quad_detail::build_patches(surface, layout, options, *diagnostics);
+  std::string failure;
+  bool relaxed = false;
+  GENBREP_CHECK(quad_detail::quantize(patches, options, &failure, &relaxed), Code::StageFailure,
+                "quad: component " + std::to_string(c) + ": quantization of " +
+                    std::to_string(patches.patches.size()) + " patches: " + failure);
+  if (relaxed)
+    diagnostics->push_back("component " + std::to_string(c) +
+                           ": the layout's sides balance only with some interior arcs at 0 edges");
+  *cage = quad_detail::fill_patches(surface, layout, patches, *diagnostics);
+  *stats = measure_cage(*cage, design);
+  if (stats->flipped_quads || stats->degenerate_quads) {
+    const int bad = stats->flipped_quads + stats->degenerate_quads;
+    const int moved = quad_detail::untangle_cage(surface, *cage, 24);
+    *stats = measure_cage(*cage, design);
+    diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(bad) +
+                           " degenerate or flipped quads after filling; " + std::to_string(moved) +
+                           " cage vertices around them smoothed, " +
+                           std::to_string(stats->flipped_quads + stats->degenerate_quads) + " left");
+  }
+  stats->patches = static_cast<int>(patches.patches.size());
+  stats->separatrices = layout.separatrices;
+  stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (layout.dropped_traces)
+    diagnostics->push_back("component " + std::to_string(c) + ": " +
+                           std::to_string(layout.dropped_traces) + " traces dropped");
+  GENBREP_CHECK(stats->flipped_quads == 0 && stats->degenerate_quads == 0, Code::StageFailure,
+                "the cage has " + std::to_string(stats->flipped_quads) + " flipped and " +
+                    std::to_string(stats->degenerate_quads) + " degenerate quads");
+}
+
+// One component. The layout depends on a few discrete choices (which singularity pairs
+// cancel, which singularities the boundary absorbs, whether separatrices cross); when the
+// requested ones give no valid cage, the neighbouring choices are tried in turn, each
+// from scratch, and the one that worked is reported. Throws the first attempt's error
+// (with the count of other attempts) when none does.
 void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
                        const QuadOptions& options, int c, QuadResult* out) {
-  QuadResult& result = *out;
-  {
-    const auto start = std::chrono::steady_clock::now();
-    const quad_detail::Surface surface(design, partition, field, c);
-    quad_detail::Layout layout = quad_detail::start_layout(surface, result.diagnostics);
-    quad_detail::trace_separatrices(surface, layout, options, result.diagnostics);
-    quad_detail::PatchLayout patches =
-        quad_detail::build_patches(surface, layout, options, result.diagnostics);
-    std::string failure;
-    int fixed_arcs = 0;
-    GENBREP_CHECK(quad_detail::quantize(patches, options, &fixed_arcs, &failure), Code::StageFailure,
-                  "quad: component " + std::to_string(c) + ": quantization of " +
-                      std::to_string(patches.patches.size()) + " patches: " + failure);
-    if (fixed_arcs)
-      result.diagnostics.push_back("component " + std::to_string(c) + ": " +
-                                   std::to_string(fixed_arcs) +
-                                   " arcs on twisted side cycles kept at their rounded length");
-    QuadCage cage = quad_detail::fill_patches(surface, layout, patches, result.diagnostics);
-    QuadStats stats = measure_cage(cage, design);
-    stats.patches = static_cast<int>(patches.patches.size());
-    stats.separatrices = layout.separatrices;
-    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (layout.dropped_traces)
-      result.diagnostics.push_back("component " + std::to_string(c) + ": " +
-                                   std::to_string(layout.dropped_traces) + " traces dropped");
-    GENBREP_CHECK(stats.flipped_quads == 0 && stats.degenerate_quads == 0, Code::StageFailure,
-                  "the cage has " + std::to_string(stats.flipped_quads) + " flipped and " +
-                      std::to_string(stats.degenerate_quads) + " degenerate quads");
-    result.cages.push_back(std::move(cage));
-    result.stats.push_back(stats);
+  struct Variant { const char* what; QuadOptions options; };
+  std::vector<Variant> variants{{"", options}};
+  auto add = [&](const char* what, auto change) {
+    QuadOptions o = options;
+    change(o);
+    variants.push_back({what, o});
+  };
+  add("separatrices crossing", [](QuadOptions& o) { o.cross_separatrices = !o.cross_separatrices; });
+  add("singularity pairs within 2x the cancel distance cancelled",
+      [](QuadOptions& o) { o.pair_cancel_distance *= 2; });
+  add("singularities within 2x the absorb distance left to the boundary",
+      [](QuadOptions& o) { o.boundary_absorb_distance *= 2; });
+  add("both distances doubled", [](QuadOptions& o) {
+    o.pair_cancel_distance *= 2;
+    o.boundary_absorb_distance *= 2;
+  });
+  add("both distances doubled, separatrices crossing", [](QuadOptions& o) {
+    o.pair_cancel_distance *= 2;
+    o.boundary_absorb_distance *= 2;
+    o.cross_separatrices = !o.cross_separatrices;
+  });
+  std::string first_failure;
+  for (size_t k = 0; k < variants.size(); ++k) {
+    QuadCage cage;
+    QuadStats stats;
+    Diagnostics diagnostics;
+    try {
+      extract_once(design, partition, field, variants[k].options, c, &cage, &stats, &diagnostics);
+    } catch (const Error& e) {
+      if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
+      if (k == 0) first_failure = e.what();
+      continue;
+    }
+    out->diagnostics.insert(out->diagnostics.end(), diagnostics.begin(), diagnostics.end());
+    if (k > 0)
+      out->diagnostics.push_back("component " + std::to_string(c) + ": the requested layout failed (" +
+                                 first_failure + "); the cage uses the layout with " +
+                                 variants[k].what);
+    out->cages.push_back(std::move(cage));
+    out->stats.push_back(stats);
+    return;
   }
+  throw Error(Code::StageFailure, first_failure + " (and " + std::to_string(variants.size() - 1) +
+                                      " alternative layouts failed too)");
 }
 
 }  // namespace

@@ -1,19 +1,26 @@
 // quad/quantize.cpp — exact quantization of the patch layout (quad/quad.h step 2): the
 // integer count of cage edges on every arc, so that the two pairs of opposite sides of
 // every patch have equal sums (the integer-grid condition of §6 for a patch layout).
-// Formulation (min-cost flow, as suggested in issue 5): each patch gives two conservation
-// constraints, one per pair of opposite sides ("u" and "v"); an arc lies on at most two
-// patch sides, so every arc is one edge of a network whose nodes are the (patch, pair)
-// constraints, plus one free "ground" node for the boundary loops' side (arcs on a loop
-// have one constraint only). Signs are made consistent by 2-colouring the constraints
-// (flipping a constraint's sign); then Σ(side a) − Σ(side b) = 0 is flow conservation.
-// Costs are convex in the count: (n − t)² / t with t = length / target size, so successive
-// shortest paths on unit increments from the separable optimum round(t) give the exact
-// integer optimum with n ≥ 1 (no rounding heuristics, no oscillation).
-// Complexity: O(imbalance · nodes · arcs) (Bellman–Ford per unit), small in practice.
+// Formulation: a small integer program, solved by GLPK's branch-and-cut. Every arc is an
+// integer variable n ≥ lower (1, or 0 for short interior arcs); every patch gives two
+// equalities Σ(side 0) = Σ(side 2), Σ(side 1) = Σ(side 3). The cost is separable and convex,
+// (n − t)² / max(t, 1) with t = length / target size, written exactly at the integers as a
+// piecewise-linear function (unit segment variables with increasing slopes).
+// Why not a min-cost flow: around singularities a T-mesh has side cycles of odd twist
+// (Lyon et al. 2021), where an arc enters both of its constraints with the same sign; the
+// constraint matrix is then that of a bidirected graph, not a network, and rounding or
+// local search can leave it infeasible (the layouts of the boss and components fixtures
+// did). The integer program has no such case. Its LP relaxation is half-integral and the
+// constraints are homogeneous, so an integer solution exists whenever a real one does
+// (twice a half-integral solution), and branch-and-cut finds the nearest.
+// Complexity: arcs · segments columns (segments ≈ 2t + 8); the layouts seen here (≤ a
+// few hundred arcs) solve in milliseconds. A time limit keeps the best solution found.
+#include <glpk.h>
+
 #include <algorithm>
 #include <cmath>
-#include <deque>
+#include <map>
+#include <memory>
 #include <string>
 
 #include "quad/detail/layout.h"
@@ -22,195 +29,85 @@ namespace genbrep::quad_detail {
 
 namespace {
 
+struct ProblemDeleter {
+  void operator()(glp_prob* p) const { glp_delete_prob(p); }
+};
+
 // One exact solve with per-arc lower bounds (0 or 1).
 bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<int>& lower,
-           int* fixed_arcs, std::string* failure) {
+           std::string* failure) {
   const int arcs = static_cast<int>(layout.arcs.size());
-  const int nodes = 2 * static_cast<int>(layout.patches.size());
-  // Incidences per arc: (node, sign) with sign +1 on sides 0/1, −1 on sides 2/3; an arc on
-  // both opposite sides of one patch cancels there (its count is free in that patch).
-  std::vector<std::vector<std::pair<int, int>>> incidence(arcs);
-  for (size_t p = 0; p < layout.patches.size(); ++p)
-    for (int side = 0; side < 4; ++side)
-      for (auto& [a, reversed] : layout.patches[p].sides[side]) {
-        const int node = 2 * static_cast<int>(p) + side % 2, sign = side < 2 ? 1 : -1;
-        auto& list = incidence[a];
-        auto same = std::find_if(list.begin(), list.end(), [&](auto& x) { return x.first == node; });
-        if (same == list.end()) list.emplace_back(node, sign);
-        else if (same->second == -sign) list.erase(same);
-        else same->second += sign;  // ±2: not a network edge, rejected below
-      }
-  for (int a = 0; a < arcs; ++a)
-    for (auto& [node, sign] : incidence[a])
-      if (std::abs(sign) != 1 || incidence[a].size() > 2) {
-        *failure = "arc " + std::to_string(a) + " appears twice on one side of a patch";
-        return false;
-      }
-  // 2-colouring: flip[N] · sign must be opposite at the two ends of every arc.
-  std::vector<std::vector<std::pair<int, int>>> adjacent(nodes);  // (other node, parity)
-  for (int a = 0; a < arcs; ++a)
-    if (incidence[a].size() == 2) {
-      const auto [n0, s0] = incidence[a][0];
-      const auto [n1, s1] = incidence[a][1];
-      adjacent[n0].emplace_back(n1, -s0 * s1);
-      adjacent[n1].emplace_back(n0, -s0 * s1);
+  // Rows: the patches' two equalities, with an arc's coefficients summed (an arc on both
+  // opposite sides of one patch cancels there).
+  std::vector<std::map<int, int>> rows;
+  for (const Patch& patch : layout.patches)
+    for (int pair = 0; pair < 2; ++pair) {
+      std::map<int, int> row;
+      for (int side : {pair, pair + 2})
+        for (auto& [a, reversed] : patch.sides[side]) row[a] += side < 2 ? 1 : -1;
+      for (auto it = row.begin(); it != row.end();) it = it->second ? std::next(it) : row.erase(it);
+      if (row.empty()) continue;
+      rows.push_back(std::move(row));
     }
-  // Around singularities a T-mesh can have cycles of odd twist (Lyon et al. 2021: T-mesh
-  // quantization is not a network problem in general). Arcs closing such a cycle end with
-  // the same sign at both constraints ("bidirected"); they get a fixed count below and the
-  // network balances the rest.
-  std::vector<int> flip(nodes, 0);
-  for (int root = 0; root < nodes; ++root) {
-    if (flip[root]) continue;
-    flip[root] = 1;
-    std::deque<int> queue{root};
-    while (!queue.empty()) {
-      const int n = queue.front();
-      queue.pop_front();
-      for (auto [m, parity] : adjacent[n])
-        if (!flip[m]) flip[m] = flip[n] * parity, queue.push_back(m);
-    }
-  }
-  // Network: arc a runs tail → head (head: effective sign +1). Ground = node `nodes`.
-  const int ground = nodes;
-  std::vector<int> tail(arcs, -1), head(arcs, -1);
-  std::vector<double> target(arcs);
-  std::vector<int> count(arcs);
-  std::vector<int> bidirected;  // arcs with the same effective sign at both ends
-  bool has_ground = false;
+  glp_term_out(GLP_OFF);
+  std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
+  glp_prob* lp = problem.get();
+  glp_set_obj_dir(lp, GLP_MIN);
+  // Columns: per arc its count n (integer), then the unit segments above and below the
+  // rounded target b: n − Σ up + Σ down = b, each segment priced at its cost increment.
+  std::vector<int> count_col(arcs);
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0};
+  const int link_rows = arcs;
+  glp_add_rows(lp, link_rows + static_cast<int>(rows.size()));
   for (int a = 0; a < arcs; ++a) {
-    target[a] = std::max(layout.arcs[a].target * options.density, 1e-3);
-    count[a] = std::max(lower[a], static_cast<int>(std::lround(target[a])));
-    tail[a] = head[a] = ground;
-    int sum = 0;
-    for (auto [node, sign] : incidence[a]) {
-      (sign * flip[node] > 0 ? head[a] : tail[a]) = node;
-      sum += sign * flip[node];
+    const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
+    const int base = std::max(lower[a], static_cast<int>(std::lround(t)));
+    const int upper = 2 * base + 8;
+    auto cost = [&](int n) { return (n - t) * (n - t) / std::max(t, 1.0); };
+    const int row = a + 1;
+    glp_set_row_bnds(lp, row, GLP_FX, base, base);
+    const int col = glp_add_cols(lp, 1);
+    count_col[a] = col;
+    glp_set_col_kind(lp, col, GLP_IV);
+    glp_set_col_bnds(lp, col, GLP_DB, lower[a], upper);
+    ia.push_back(row), ja.push_back(col), ar.push_back(1.0);
+    for (int n = base; n < upper; ++n) {  // n → n + 1
+      const int up = glp_add_cols(lp, 1);
+      glp_set_col_bnds(lp, up, GLP_DB, 0, 1);
+      glp_set_obj_coef(lp, up, cost(n + 1) - cost(n));
+      ia.push_back(row), ja.push_back(up), ar.push_back(-1.0);
     }
-    if (std::abs(sum) == 2) bidirected.push_back(a), tail[a] = head[a] = -1;
-    has_ground |= incidence[a].size() == 1;
-  }
-  *fixed_arcs = static_cast<int>(bidirected.size());
-  // Without a boundary the fixed arcs must balance among themselves: Σ(++) = Σ(−−).
-  if (!has_ground && !bidirected.empty()) {
-    auto eff = [&](int a) { return incidence[a][0].second * flip[incidence[a][0].first]; };
-    for (int guard = 0; guard < 100000; ++guard) {
-      int balance = 0;
-      for (int a : bidirected) balance += eff(a) * count[a];
-      if (!balance) break;
-      int pick = -1, delta = 0;
-      double best = 1e300;
-      for (int a : bidirected)
-        for (int d : {1, -1}) {
-          if (eff(a) * d * balance >= 0 || count[a] + d < lower[a]) continue;
-          const double now = count[a] - target[a], cost = ((now + d) * (now + d) - now * now) / target[a];
-          if (cost < best) best = cost, pick = a, delta = d;
-        }
-      if (pick < 0) {
-        *failure = "the twisted side constraints of a closed layout cannot balance";
-        return false;
-      }
-      count[pick] += delta;
+    for (int n = base; n > lower[a]; --n) {  // n → n − 1
+      const int down = glp_add_cols(lp, 1);
+      glp_set_col_bnds(lp, down, GLP_DB, 0, 1);
+      glp_set_obj_coef(lp, down, cost(n - 1) - cost(n));
+      ia.push_back(row), ja.push_back(down), ar.push_back(1.0);
     }
   }
-  auto marginal = [&](int a, int delta) {  // cost of count[a] += delta (delta = ±1)
-    const double now = count[a] - target[a], next = now + delta;
-    return (next * next - now * now) / std::max(target[a], 1.0);
-  };
-  // Successive shortest paths, one unit at a time: from a node with positive excess (or the
-  // ground) to a node with negative excess (or the ground). Residual moves of arc a: +1
-  // (tail → head) always, −1 (head → tail) while count > 1. Returns the excess left.
-  std::vector<double> dist(nodes + 1);
-  std::vector<int> via(nodes + 1);  // arc · 2 + (0: increase, 1: decrease), −1 = source
-  auto settle = [&](std::vector<int>& count) {
-    std::vector<int> excess(nodes + 1, 0);  // inflow − outflow; the ground's is ignored
-    for (int a = 0; a < arcs; ++a)
-      if (tail[a] != head[a] && tail[a] >= 0) excess[head[a]] += count[a], excess[tail[a]] -= count[a];
-    for (int a : bidirected)
-      for (auto [node, sign] : incidence[a]) excess[node] += sign * flip[node] * count[a];
-    for (bool from_positive = true;;) {
-      bool positive = false, negative = false;
-      for (int n = 0; n < nodes; ++n) positive |= excess[n] > 0, negative |= excess[n] < 0;
-      if (!positive && !negative) return 0;
-      from_positive = from_positive && positive;
-      std::fill(dist.begin(), dist.end(), 1e300);
-      std::fill(via.begin(), via.end(), -2);
-      for (int n = 0; n < nodes; ++n)
-        if (from_positive && excess[n] > 0) dist[n] = 0, via[n] = -1;
-      if (!from_positive) dist[ground] = 0, via[ground] = -1;
-      for (int pass = 0, changed = 1; changed && pass <= nodes + 1; ++pass) {
-        changed = 0;
-        for (int a = 0; a < arcs; ++a) {
-          if (tail[a] == head[a] || tail[a] < 0) continue;
-          if (dist[tail[a]] < 1e299 && dist[tail[a]] + marginal(a, 1) < dist[head[a]] - 1e-12)
-            dist[head[a]] = dist[tail[a]] + marginal(a, 1), via[head[a]] = 2 * a, changed = 1;
-          if (count[a] > lower[a] && dist[head[a]] < 1e299 &&
-              dist[head[a]] + marginal(a, -1) < dist[tail[a]] - 1e-12)
-            dist[tail[a]] = dist[head[a]] + marginal(a, -1), via[tail[a]] = 2 * a + 1, changed = 1;
-        }
-      }
-      int sink = -1;
-      for (int n = 0; n <= nodes; ++n) {
-        const bool wanted = n == ground ? from_positive : excess[n] < 0;
-        if (wanted && via[n] != -1 && dist[n] < 1e299 && (sink < 0 || dist[n] < dist[sink])) sink = n;
-      }
-      if (sink < 0) {
-        if (from_positive && negative) { from_positive = false; continue; }
-        int left = 0;
-        for (int n = 0; n < nodes; ++n) left += std::abs(excess[n]);
-        return left;
-      }
-      if (sink != ground) ++excess[sink];
-      for (int n = sink, guard = 0; via[n] != -1 && guard <= nodes + 1; ++guard) {
-        const int a = via[n] / 2;
-        const bool increase = via[n] % 2 == 0;
-        count[a] += increase ? 1 : -1;
-        n = increase ? tail[a] : head[a];
-        if (via[n] == -1 && n != ground) --excess[n];
-      }
-    }
-  };
-  // The fixed (bidirected) arcs: if the network cannot balance them, move them one unit at
-  // a time, greedily by the excess left (a small local search; reported as fixed arcs).
-  std::vector<int> best = count;
-  int left = settle(best);
-  for (int round = 0; left && round < 4 * static_cast<int>(bidirected.size()) + 4; ++round) {
-    std::vector<int> pick;
-    int pick_left = left;
-    auto consider = [&](std::vector<int> trial) {
-      std::vector<int> settled = trial;
-      const int l = settle(settled);
-      if (l < pick_left) pick_left = l, pick = std::move(trial), best = std::move(settled);
-    };
-    // Single moves of ±1, ±2 and paired ±1 moves of two fixed arcs.
-    const int b = static_cast<int>(bidirected.size());
-    for (int i = 0; i < b; ++i)
-      for (int d : {1, -1, 2, -2}) {
-        const int a = bidirected[i];
-        if (count[a] + d < lower[a]) continue;
-        std::vector<int> trial = count;
-        trial[a] += d;
-        consider(trial);
-        if (std::abs(d) == 2) continue;
-        for (int j = i + 1; j < b; ++j)
-          for (int e : {1, -1}) {
-            const int c = bidirected[j];
-            if (count[c] + e < lower[c]) continue;
-            std::vector<int> pair = trial;
-            pair[c] += e;
-            consider(pair);
-          }
-      }
-    if (pick.empty()) break;
-    count = pick, left = pick_left;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const int row = link_rows + static_cast<int>(r) + 1;
+    glp_set_row_bnds(lp, row, GLP_FX, 0, 0);
+    for (auto& [a, c] : rows[r]) ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
   }
-  if (left) {
-    *failure = "no integer counts ≥ 1 make opposite sides equal (" + std::to_string(left) +
-               " units of imbalance left; " + std::to_string(bidirected.size()) + " twisted arcs)";
+  glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+  glp_iocp parameters;
+  glp_init_iocp(&parameters);
+  parameters.msg_lev = GLP_MSG_OFF;
+  parameters.presolve = GLP_ON;
+  parameters.tm_lim = 10000;
+  const int code = glp_intopt(lp, &parameters);
+  const int status = glp_mip_status(lp);
+  if ((code != 0 && code != GLP_ETMLIM) || (status != GLP_OPT && status != GLP_FEAS)) {
+    *failure = code == GLP_ENOPFS || status == GLP_NOFEAS
+                   ? "no integer counts make opposite sides equal (" +
+                         std::to_string(rows.size()) + " side constraints)"
+                   : "the integer program stopped without a solution (GLPK code " +
+                         std::to_string(code) + ")";
     return false;
   }
-  count = best;
-  for (int a = 0; a < arcs; ++a) layout.arcs[a].count = count[a];
+  for (int a = 0; a < arcs; ++a)
+    layout.arcs[a].count = static_cast<int>(std::lround(glp_mip_col_val(lp, count_col[a])));
   return true;
 }
 
@@ -222,18 +119,29 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
 // its other pair (fill.cpp glues them). Loop arcs keep ≥ 1 so every chain stays on its
 // loop: a collapsing patch that touches a loop gets a lower bound of 1 on the longest arc
 // of its vanishing side, and the solve is repeated.
-bool quantize(PatchLayout& layout, const QuadOptions& options, int* fixed_arcs,
-              std::string* failure) {
+// A layout whose separatrices end on curves they already crossed (a helix around a hole:
+// going round, each side is longer than the last by a T-junction's offset) has no solution
+// with those bounds; then every interior arc may get 0 (reported by the caller as
+// collapsed patches), which the cost keeps to the fewest and shortest arcs.
+bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* failure,
+              bool* relaxed) {
   const int arcs = static_cast<int>(layout.arcs.size());
   std::vector<int> sides_of(arcs, 0);
   for (const Patch& patch : layout.patches)
     for (const auto& side : patch.sides)
       for (auto& [a, reversed] : side) ++sides_of[a];
+  *relaxed = false;
   std::vector<int> lower(arcs, 1);
   for (int a = 0; a < arcs; ++a)
     if (sides_of[a] == 2 && layout.arcs[a].target * options.density < 1.0) lower[a] = 0;
   for (int round = 0; round <= 4 * arcs; ++round) {
-    if (!solve(layout, options, lower, fixed_arcs, failure)) return false;
+    if (!solve(layout, options, lower, failure)) {
+      if (*relaxed) return false;
+      *relaxed = true;
+      for (int a = 0; a < arcs; ++a)
+        if (sides_of[a] == 2) lower[a] = 0;
+      continue;
+    }
     bool vanished = false;
     for (const Patch& patch : layout.patches) {
       bool on_loop = false;

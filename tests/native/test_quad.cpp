@@ -178,9 +178,6 @@ void expect_targets(const std::string& name, const QuadStats& s) {
 
 }  // namespace
 
-// Scenes whose layout the quantized patch layout cannot yet handle are DISABLED_ below:
-// they are known failures, described with their causes in docs/quad_method.md
-// (run them with --gtest_also_run_disabled_tests).
 
 TEST(Quad, TubeIsAnAnnulusWithTwoChains) {
   const Partitioned r = relaxed(partition_scene(tube_scene(0.03)));
@@ -201,7 +198,7 @@ TEST(Quad, TwoArchesGiveTwoValidCages) {
   for (const auto& s : result.stats) expect_targets("two_arches", s);
 }
 
-TEST(Quad, DISABLED_GrownBoxIsADisk) {
+TEST(Quad, GrownBoxIsADisk) {
   const Partitioned r = relaxed(partition_scene(grown_box_scene(0.04)));
   int problems = 0;
   const QuadResult result = extract_and_check("grown_box", r, &problems);
@@ -210,7 +207,7 @@ TEST(Quad, DISABLED_GrownBoxIsADisk) {
   EXPECT_EQ(result.cages[0].boundary_chains.size(), 1u);
 }
 
-TEST(Quad, DISABLED_ClosedSphereHasEightValenceThreeVertices) {
+TEST(Quad, ClosedSphereHasEightValenceThreeVertices) {
   const Partitioned r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
                                   Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.06);
   int problems = 0;
@@ -218,9 +215,12 @@ TEST(Quad, DISABLED_ClosedSphereHasEightValenceThreeVertices) {
   ASSERT_EQ(result.cages.size(), 1u);
   EXPECT_EQ(problems, 0);
   EXPECT_TRUE(result.cages[0].boundary_chains.empty());
+  // The field has eight +1/4 singularities; the cage keeps exactly those as its irregular
+  // vertices (a closed cage of genus 0: Σ(4 − valence) = 8).
+  EXPECT_EQ(result.stats[0].irregular_vertices, 8);
 }
 
-TEST(Quad, DISABLED_BoltHole) {
+TEST(Quad, BoltHole) {
   const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
   int problems = 0;
   const QuadResult result = extract_and_check("bolt_hole", r, &problems);
@@ -229,9 +229,9 @@ TEST(Quad, DISABLED_BoltHole) {
   expect_targets("bolt_hole", result.stats[0]);
 }
 
-// Where the layout fails (grown_box today, see docs/quad_method.md), the component gets a
-// named failure and no cage; any cage that is returned passes the independent checks.
-TEST(Quad, AFailingComponentIsReportedNotReturnedInvalid) {
+// Every component gets either a cage that passes the independent checks or a named
+// failure, never both and never neither.
+TEST(Quad, EveryComponentGetsAValidCageOrANamedFailure) {
   const Partitioned r = relaxed(partition_scene(grown_box_scene(0.04)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   const QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());

@@ -109,10 +109,15 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                           Diagnostics& diagnostics);
 
 // Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
-// min-cost flow (quantize.cpp); false with the reason in `failure` if none exists.
-// `fixed_arcs`: arcs closing a twisted cycle, held at their rounded length (reported).
-bool quantize(PatchLayout& patches, const QuadOptions& options, int* fixed_arcs,
-              std::string* failure);
+// integer program (quantize.cpp); false with the reason in `failure` if none exists.
+// `relaxed`: the layout needed long interior arcs at 0 edges to balance (reported).
+bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
+              bool* relaxed);
+
+// Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
+// within a few rings of them are smoothed and projected back onto the component, for at
+// most `max_rounds` rounds (untangle.cpp). Returns how many vertices moved.
+int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds);
 
 // Cage from the quantized layout.
 QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& patches,

@@ -1,0 +1,112 @@
+// quad/untangle.cpp — local repair of a filled cage (quad/quad.h step 4): quads that came
+// out degenerate or turned over (a re-cornered patch, or nodes merged by a zero-length
+// arc, can squeeze a grid cell to nothing) are opened up by smoothing the interior cage
+// vertices around them and projecting them back onto the component.
+// Only vertices within a few rings of a bad quad move, so the rest of the cage, its
+// boundary chains (on the loops) and its irregular vertices stay where the layout put them.
+// Complexity: O(rounds · moved vertices · log F) (AABB closest points).
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "quad/detail/layout.h"
+
+namespace genbrep::quad_detail {
+namespace {
+
+using Kernel = CGAL::Simple_cartesian<double>;
+using Triangle = Kernel::Triangle_3;
+using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+
+constexpr double kPi = 3.14159265358979323846;
+// Corners under this are "squeezed" here; the validity bar (measure_cage) is 1°, and the
+// margin keeps a repaired quad from sitting just above it.
+constexpr double kMinCornerDegrees = 5.0;
+
+}  // namespace
+
+int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds) {
+  std::vector<Triangle> triangles;
+  std::vector<int> triangle_face;
+  for (auto f : s.mesh.faces()) {
+    if (!s.in(f.idx())) continue;
+    Vec3 c[3];
+    int k = 0;
+    for (auto v : s.mesh.fv_range(f)) c[k++] = s.point[v.idx()];
+    if ((c[1] - c[0]).cross(c[2] - c[0]).norm() <= 0) continue;
+    triangles.emplace_back(Kernel::Point_3(c[0].x(), c[0].y(), c[0].z()),
+                           Kernel::Point_3(c[1].x(), c[1].y(), c[1].z()),
+                           Kernel::Point_3(c[2].x(), c[2].y(), c[2].z()));
+    triangle_face.push_back(f.idx());
+  }
+  if (triangles.empty()) return 0;
+  Tree tree(triangles.begin(), triangles.end());
+  tree.accelerate_distance_queries();
+  // Closest point on the component and the normal of the face it lies on.
+  auto project = [&](const Vec3& p, Vec3* normal) {
+    const auto hit = tree.closest_point_and_primitive(Kernel::Point_3(p.x(), p.y(), p.z()));
+    if (normal) *normal = s.face_normal[triangle_face[hit.second - triangles.begin()]];
+    return Vec3(hit.first.x(), hit.first.y(), hit.first.z());
+  };
+  const int nv = static_cast<int>(cage.vertices.rows());
+  const int nq = static_cast<int>(cage.quads.rows());
+  std::vector<std::set<int>> neighbours(nv);
+  std::vector<std::vector<int>> quads_of(nv);
+  for (int q = 0; q < nq; ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      neighbours[a].insert(b), neighbours[b].insert(a);
+      quads_of[a].push_back(q);
+    }
+  std::vector<char> fixed(nv, 0);
+  for (const auto& chain : cage.boundary_chains)
+    for (int v : chain) fixed[v] = 1;
+  auto point = [&](int v) { return Vec3(cage.vertices.row(v).transpose()); };
+  auto bad = [&](int q) {
+    Vec3 c[4];
+    for (int k = 0; k < 4; ++k) c[k] = point(cage.quads(q, k));
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
+      if (a.norm() == 0 || b.norm() == 0) return true;
+      if (std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi < kMinCornerDegrees) return true;
+    }
+    Vec3 normal;
+    project(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal);
+    return (c[2] - c[0]).cross(c[3] - c[1]).dot(normal) <= 0;
+  };
+  std::set<int> moved_ever;
+  for (int round = 0; round < max_rounds; ++round) {
+    std::vector<int> bad_quads;
+    for (int q = 0; q < nq; ++q)
+      if (bad(q)) bad_quads.push_back(q);
+    if (bad_quads.empty()) break;
+    // The free vertices within 1 + round / 4 rings of a bad quad (the region grows while
+    // the repair does not succeed).
+    std::set<int> region;
+    for (int q : bad_quads)
+      for (int k = 0; k < 4; ++k) region.insert(cage.quads(q, k));
+    for (int ring = 0; ring < 1 + round / 4; ++ring) {
+      std::set<int> grown = region;
+      for (int v : region) grown.insert(neighbours[v].begin(), neighbours[v].end());
+      region.swap(grown);
+    }
+    for (int sweep = 0; sweep < 4; ++sweep)
+      for (int v : region) {
+        if (fixed[v] || neighbours[v].empty()) continue;
+        Vec3 mean = Vec3::Zero();
+        for (int w : neighbours[v]) mean += point(w);
+        mean /= static_cast<double>(neighbours[v].size());
+        cage.vertices.row(v) = project(mean, nullptr).transpose();
+        moved_ever.insert(v);
+      }
+  }
+  return static_cast<int>(moved_ever.size());
+}
+
+}  // namespace genbrep::quad_detail
