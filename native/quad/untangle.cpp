@@ -80,16 +80,23 @@ int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds) {
     project(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal);
     return (c[2] - c[0]).cross(c[3] - c[1]).dot(normal) <= 0;
   };
-  std::set<int> moved_ever;
-  for (int round = 0; round < max_rounds; ++round) {
-    std::vector<int> bad_quads;
+  // Each round smooths the free vertices within 1 + round / 4 rings of a bad quad (the
+  // region grows while the repair does not succeed). A vertex moves within its tangent
+  // plane and is projected back; a move whose projection lands on a face facing another
+  // way (the far side of a thin wall) is refused. The best cage seen is kept.
+  auto bad_quads = [&] {
+    std::vector<int> list;
     for (int q = 0; q < nq; ++q)
-      if (bad(q)) bad_quads.push_back(q);
-    if (bad_quads.empty()) break;
-    // The free vertices within 1 + round / 4 rings of a bad quad (the region grows while
-    // the repair does not succeed).
+      if (bad(q)) list.push_back(q);
+    return list;
+  };
+  std::vector<int> current = bad_quads();
+  Eigen::MatrixX3d best = cage.vertices;
+  size_t best_bad = current.size();
+  std::set<int> moved_ever;
+  for (int round = 0; round < max_rounds && !current.empty(); ++round) {
     std::set<int> region;
-    for (int q : bad_quads)
+    for (int q : current)
       for (int k = 0; k < 4; ++k) region.insert(cage.quads(q, k));
     for (int ring = 0; ring < 1 + round / 4; ++ring) {
       std::set<int> grown = region;
@@ -99,13 +106,23 @@ int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds) {
     for (int sweep = 0; sweep < 4; ++sweep)
       for (int v : region) {
         if (fixed[v] || neighbours[v].empty()) continue;
+        Vec3 normal;
+        const Vec3 at = project(point(v), &normal);
         Vec3 mean = Vec3::Zero();
         for (int w : neighbours[v]) mean += point(w);
         mean /= static_cast<double>(neighbours[v].size());
-        cage.vertices.row(v) = project(mean, nullptr).transpose();
+        Vec3 step = mean - at;
+        step -= step.dot(normal) * normal;
+        Vec3 landed_normal;
+        const Vec3 landed = project(at + step, &landed_normal);
+        if (landed_normal.dot(normal) < 0.5) continue;
+        cage.vertices.row(v) = landed.transpose();
         moved_ever.insert(v);
       }
+    current = bad_quads();
+    if (current.size() < best_bad) best_bad = current.size(), best = cage.vertices;
   }
+  cage.vertices = best;
   return static_cast<int>(moved_ever.size());
 }
 
