@@ -13,7 +13,11 @@
 //      Patches that are not topological disks with four corners get extra field-aligned
 //      cuts from their boundary; corners are read from the angles between the curves.
 //   2. quantization: every layout arc gets an integer count ≥ 1 near length / size; the
-//      two pairs of opposite sides of every patch get equal sums (exact min-cost flow).
+//      two pairs of opposite sides of every patch get equal sums (an exact integer
+//      program, GLPK); interior arcs may get 0 where the sides balance only so.
+//   4. untangling: quads the filling squeezed or turned over are opened up by local
+//      smoothing on the surface. A component whose cage stays invalid is retried with a
+//      few neighbouring layout choices (reported) before it is given up.
 //   3. filling: every patch is mapped to its integer rectangle (Tutte map with the sides
 //      sampled by arc length) and the grid's points are lifted back to the surface.
 // Gives: one QuadCage per organic component, in component order, with vertices on the
