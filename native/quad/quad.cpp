@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "quad/detail/layout.h"
@@ -230,8 +231,40 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     out->stats.push_back(stats);
     return;
   }
-  throw Error(Code::StageFailure, first_failure + " (and " + std::to_string(variants.size() - 1) +
-                                      " alternative layouts failed too)");
+  // Last resort: the split coarse remesh, valid by construction but not field-aligned.
+  // A coarse remesh of a thin part can fold; then it is made finer.
+  const quad_detail::Surface surface(design, partition, field, c);
+  double size = 0;
+  for (int v : surface.vertices) size += surface.vertex_size[v];
+  size /= std::max<size_t>(1, surface.vertices.size()) * options.density;
+  const auto start = std::chrono::steady_clock::now();
+  QuadCage cage;
+  QuadStats stats;
+  double scale = 0;
+  for (double factor : {2.0, 1.5, 1.0, 0.75}) {
+    cage = quad_detail::fallback_cage(surface, factor * size);
+    stats = measure_cage(cage, design);
+    if (stats.flipped_quads || stats.degenerate_quads) {
+      quad_detail::untangle_cage(surface, cage, 24);
+      stats = measure_cage(cage, design);
+    }
+    scale = factor;
+    if (!stats.flipped_quads && !stats.degenerate_quads) break;
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.fallback = true;
+  GENBREP_CHECK(stats.flipped_quads == 0 && stats.degenerate_quads == 0, Code::StageFailure,
+                first_failure + " (and " + std::to_string(variants.size() - 1) +
+                    " alternative layouts and the fallback cage failed too)");
+  char scale_text[16];
+  std::snprintf(scale_text, sizeof scale_text, "%.2g", scale);
+  out->diagnostics.push_back(
+      "component " + std::to_string(c) + ": no field-aligned layout gave a valid cage (" +
+      first_failure + "); the cage is the FALLBACK: a coarse remesh (edge " + scale_text +
+      " x the target) split into quads, not aligned with the field, "
+      "with irregular vertices wherever triangles could not be paired");
+  out->cages.push_back(std::move(cage));
+  out->stats.push_back(stats);
 }
 
 }  // namespace

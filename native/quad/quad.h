@@ -76,6 +76,7 @@ struct QuadStats {
   int degenerate_quads = 0;  // a corner angle below 1° or a repeated corner
   int patches = 0;
   int separatrices = 0;
+  bool fallback = false;  // no field-aligned layout worked: the split coarse remesh (not aligned)
   double seconds = 0;
   double interior_valence4_fraction() const {
     return interior_vertices ? double(interior_valence4) / interior_vertices : 1.0;

@@ -4,12 +4,7 @@
 // vertices around them and projecting them back onto the component.
 // Only vertices within a few rings of a bad quad move, so the rest of the cage, its
 // boundary chains (on the loops) and its irregular vertices stay where the layout put them.
-// Complexity: O(rounds · moved vertices · log F) (AABB closest points).
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Simple_cartesian.h>
-
+// Complexity: O(rounds · moved vertices · log F) (closest points, locate.cpp).
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -19,11 +14,6 @@
 namespace genbrep::quad_detail {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using Triangle = Kernel::Triangle_3;
-using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
-
 constexpr double kPi = 3.14159265358979323846;
 // Corners under this are "squeezed" here; the validity bar (measure_cage) is 1°, and the
 // margin keeps a repaired quad from sitting just above it.
@@ -32,28 +22,8 @@ constexpr double kMinCornerDegrees = 5.0;
 }  // namespace
 
 int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds) {
-  std::vector<Triangle> triangles;
-  std::vector<int> triangle_face;
-  for (auto f : s.mesh.faces()) {
-    if (!s.in(f.idx())) continue;
-    Vec3 c[3];
-    int k = 0;
-    for (auto v : s.mesh.fv_range(f)) c[k++] = s.point[v.idx()];
-    if ((c[1] - c[0]).cross(c[2] - c[0]).norm() <= 0) continue;
-    triangles.emplace_back(Kernel::Point_3(c[0].x(), c[0].y(), c[0].z()),
-                           Kernel::Point_3(c[1].x(), c[1].y(), c[1].z()),
-                           Kernel::Point_3(c[2].x(), c[2].y(), c[2].z()));
-    triangle_face.push_back(f.idx());
-  }
-  if (triangles.empty()) return 0;
-  Tree tree(triangles.begin(), triangles.end());
-  tree.accelerate_distance_queries();
-  // Closest point on the component and the normal of the face it lies on.
-  auto project = [&](const Vec3& p, Vec3* normal) {
-    const auto hit = tree.closest_point_and_primitive(Kernel::Point_3(p.x(), p.y(), p.z()));
-    if (normal) *normal = s.face_normal[triangle_face[hit.second - triangles.begin()]];
-    return Vec3(hit.first.x(), hit.first.y(), hit.first.z());
-  };
+  const ComponentLocator locator(s);
+  auto project = [&](const Vec3& p, Vec3* normal) { return locator.closest(p, normal); };
   const int nv = static_cast<int>(cage.vertices.rows());
   const int nq = static_cast<int>(cage.quads.rows());
   std::vector<std::set<int>> neighbours(nv);

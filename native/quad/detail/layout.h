@@ -2,6 +2,7 @@
 // field-guided tracing along mesh edges, the patch layout and its filling.
 #pragma once
 #include <Eigen/Dense>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -114,10 +115,27 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
               bool* relaxed);
 
+// Closest points on the component's triangles (locate.cpp), with the normal of the face hit.
+class ComponentLocator {
+ public:
+  explicit ComponentLocator(const Surface& s);
+  ~ComponentLocator();
+  Vec3 closest(const Vec3& p, Vec3* normal) const;
+
+ private:
+  struct Impl;
+  const Surface& surface_;
+  std::unique_ptr<Impl> impl_;
+};
+
 // Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
 // within a few rings of them are smoothed and projected back onto the component, for at
 // most `max_rounds` rounds (untangle.cpp). Returns how many vertices moved.
 int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds);
+
+// Last resort: a pure-quad cage that is not field-aligned (fallback.cpp), from a coarse
+// remesh at `coarse_edge_length` split once (cage edges about half that long).
+QuadCage fallback_cage(const Surface& s, double coarse_edge_length);
 
 // Cage from the quantized layout.
 QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& patches,

@@ -1,0 +1,50 @@
+// quad/locate.cpp — closest points on one organic component (CGAL AABB tree over its
+// triangles), for the cage repairs that move or add cage vertices (untangle, fallback).
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+
+#include "quad/detail/layout.h"
+
+namespace genbrep::quad_detail {
+namespace {
+using Kernel = CGAL::Simple_cartesian<double>;
+using Triangle = Kernel::Triangle_3;
+using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Triangle>::const_iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
+}  // namespace
+
+struct ComponentLocator::Impl {
+  std::vector<Triangle> triangles;
+  std::vector<int> face;  // design face of each triangle
+  Tree tree;
+};
+
+ComponentLocator::ComponentLocator(const Surface& s) : surface_(s), impl_(new Impl) {
+  for (auto f : s.mesh.faces()) {
+    if (!s.in(f.idx())) continue;
+    Vec3 c[3];
+    int k = 0;
+    for (auto v : s.mesh.fv_range(f)) c[k++] = s.point[v.idx()];
+    if ((c[1] - c[0]).cross(c[2] - c[0]).norm() <= 0) continue;  // no closest point on it
+    impl_->triangles.emplace_back(Kernel::Point_3(c[0].x(), c[0].y(), c[0].z()),
+                                  Kernel::Point_3(c[1].x(), c[1].y(), c[1].z()),
+                                  Kernel::Point_3(c[2].x(), c[2].y(), c[2].z()));
+    impl_->face.push_back(f.idx());
+  }
+  GENBREP_CHECK(!impl_->triangles.empty(), Code::StageFailure,
+                "quad: component " + std::to_string(s.component) + " has no triangle with area");
+  impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
+  impl_->tree.accelerate_distance_queries();
+}
+
+ComponentLocator::~ComponentLocator() = default;
+
+Vec3 ComponentLocator::closest(const Vec3& p, Vec3* normal) const {
+  const auto hit = impl_->tree.closest_point_and_primitive(Kernel::Point_3(p.x(), p.y(), p.z()));
+  if (normal) *normal = surface_.face_normal[impl_->face[hit.second - impl_->triangles.begin()]];
+  return Vec3(hit.first.x(), hit.first.y(), hit.first.z());
+}
+
+}  // namespace genbrep::quad_detail
