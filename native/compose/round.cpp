@@ -25,8 +25,9 @@ bool is_double(const ExactPoint& p) {
 
 bool shorter(const ExactMesh& mesh, ExactMesh::Edge_index e, const Exact::FT& squared_limit) {
   const auto h = mesh.halfedge(e);
-  return CGAL::compare(CGAL::squared_distance(mesh.point(mesh.source(h)), mesh.point(mesh.target(h))),
-                       squared_limit) == CGAL::SMALLER;
+  return CGAL::compare(
+             CGAL::squared_distance(mesh.point(mesh.source(h)), mesh.point(mesh.target(h))),
+             squared_limit) == CGAL::SMALLER;
 }
 
 }  // namespace
@@ -53,7 +54,9 @@ Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
       const ExactPoint p = mesh.point(mesh.source(h)), q = mesh.point(mesh.target(h));
       const ExactPoint kept = is_double(q) || !is_double(p) ? q : p;
       out.longest = std::max(out.longest, std::sqrt(CGAL::to_double(CGAL::squared_distance(p, q))));
-      if (out.where.size() < 16) out.where.emplace_back(CGAL::to_double(kept.x()), CGAL::to_double(kept.y()), CGAL::to_double(kept.z()));
+      if (out.where.size() < 16)
+        out.where.emplace_back(CGAL::to_double(kept.x()), CGAL::to_double(kept.y()),
+                               CGAL::to_double(kept.z()));
       const auto v = CGAL::Euler::collapse_edge(e, mesh);
       mesh.point(v) = kept;
       ++collapsed;
