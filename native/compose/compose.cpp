@@ -9,7 +9,9 @@
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <limits>
 
 #include "compose/detail/establish.h"
@@ -119,6 +121,52 @@ void measure(const TriangleMesh& mesh, ComposeReport* report) {
   report->ok = v.closed_manifold() && !report->self_intersecting && v.signed_volume > 0;
 }
 
+std::string number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2g", x);
+  return buffer;
+}
+
+std::string point_text(const Vec3& p) {
+  char buffer[96];
+  std::snprintf(buffer, sizeof buffer, "(%.4g, %.4g, %.4g)", p.x(), p.y(), p.z());
+  return buffer;
+}
+
+// Which solids the collapsed slivers lie on (within 1e-9 × scale), for the report.
+std::string near_coincidence(const detail::Rounded& rounded, const SolidSet& solids, double scale) {
+  std::string names;
+  for (int s = 0; s < solids.size(); ++s) {
+    const bool near = std::any_of(rounded.where.begin(), rounded.where.end(),
+                                  [&](const Vec3& p) { return solids.surface(s).distance(p) <= 1e-9 * scale; });
+    if (near) names += (names.empty() ? "" : ", ") + solids.describe(s);
+  }
+  std::string text = "rounding to doubles: collapsed " + std::to_string(rounded.collapsed) +
+                     " edges up to " + number(rounded.longest) + " long (slivers where operands nearly coincide";
+  if (!names.empty()) text += ": " + names;
+  text += rounded.where.empty() ? ")" : ", e.g. at " + point_text(rounded.where.front()) + ")";
+  if (rounded.blocked > 0) text += "; " + std::to_string(rounded.blocked) + " left, collapsing them would pinch the surface";
+  return text;
+}
+
+// Where the returned mesh intersects itself, by face source, for the report.
+std::string intersecting_pairs(const TriangleMesh& mesh, const SolidSet& solids) {
+  const InexactMesh m = to_inexact(mesh);
+  std::vector<std::pair<InexactMesh::Face_index, InexactMesh::Face_index>> pairs;
+  PMP::self_intersections(m, std::back_inserter(pairs));
+  auto source = [&](InexactMesh::Face_index f) {
+    const int s = mesh.triangle_source[static_cast<size_t>(f)];
+    return s >= 0 ? solids.describe(s) : "organic component " + std::to_string(-1 - s);
+  };
+  std::string text = "the composed mesh intersects itself: " + std::to_string(pairs.size()) + " triangle pairs";
+  if (!pairs.empty()) {
+    const auto [f, g] = pairs.front();
+    const Vec3 at = mesh.vertices.row(mesh.triangles(static_cast<Eigen::Index>(f), 0)).transpose();
+    text += ", e.g. " + source(f) + " against " + source(g) + " at " + point_text(at);
+  }
+  return text;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -226,10 +274,15 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     if (g.empty) report.diagnostics.push_back("the composition is empty");
     return out;
   }
-  out.mesh = detail::to_double(g.mesh);
+  // Edges below 1e-10 × the scene come from operands that nearly coincide; collapsed
+  // before rounding (round.cpp), 10× below the 1e-9 to which faces are matched to solids.
+  detail::Rounded rounded = detail::round_to_doubles(std::move(g.mesh), 1e-10 * scale);
+  out.mesh = std::move(rounded.mesh);
+  if (rounded.collapsed > 0 || rounded.blocked > 0) report.diagnostics.push_back(near_coincidence(rounded, solids, scale));
   out.mesh.triangle_source = face_sources(out.mesh, solids, cells, scale);
   for (int s : out.mesh.triangle_source) (s >= 0 ? report.solid_faces : report.organic_faces) += 1;
   measure(out.mesh, &report);
+  if (report.self_intersecting) report.diagnostics.push_back(intersecting_pairs(out.mesh, solids));
   return out;
 }
 

@@ -15,8 +15,10 @@
 // into the cell: rule 3, a seed's eroded part). Cells inside a keep-in are inside (∪ K
 // last); cells bounded by solid faces only are inside iff inside S (seeds; keep-outs are
 // subtracted); cells seen from both orientations are inside (additive after the bites,
-// rule 4) and reported. No two operands are nearly coincident: they either cross
-// transversally or share exactly coplanar faces.
+// rule 4) and reported. Organic operands cross the solids transversally or share exactly
+// coplanar faces with them; input solids may nearly coincide (a bolt in its bore), so edges
+// of the exact result shorter than 1e-10 × the scene are collapsed before it is rounded to
+// doubles (compose/round.cpp), and the rounded mesh is what the report measures.
 // Guarantees: faces on input solids carry the input's vertex positions (new vertices lie
 // only on intersection curves); the report is measured on the returned double mesh.
 // A component whose contact cannot be established (a gap between solids, §9.1) fails

@@ -55,13 +55,16 @@ std::string find_gap(const OrganicSheet& sheet, const SheetLoop& loop, const Sol
 
 // The gap if there is one, else where the boundary stays outside.
 std::string explain(const OrganicSheet& sheet, const SheetLoop& loop, const SolidSet& solids,
-                    const std::vector<Vec3>& points, double max_after) {
+                    const std::vector<Vec3>& points, double max_after, double eta) {
   const std::string gap = find_gap(sheet, loop, solids, points);
   if (!gap.empty()) return gap;
   const std::string who = "the organic boundary of component " + std::to_string(sheet.component);
   std::string names;
   for (int s : loop.solids) names += (names.empty() ? "" : ", ") + solids.describe(s);
-  return who + " cannot be pulled inside " + names + " (stays " + number(max_after) + " outside)";
+  // F > 0: outside S; η < F ≤ 0: inside, but not as deep as η asks (a doubled η deeper
+  // than the solid is thick).
+  return who + " cannot be pulled inside " + names + " (stays " +
+         (max_after > 0 ? number(max_after) + " outside)" : "at depth " + number(-max_after) + " < |η| = " + number(-eta) + ")");
 }
 
 }  // namespace
@@ -123,10 +126,16 @@ ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPu
     }
     if (!pull.converged()) {
       // Doubling η cannot help a boundary that cannot get inside (§9.1): name the cause.
+      if (doubling > 0) {  // the doublings were for a contact problem: say which
+        out.diagnostics.push_back("organic component " + std::to_string(sheet.component) +
+                                  ": no contact curve homeomorphic to the boundary up to η = " + number(out.eta / 2) +
+                                  " (at η₀: " + first_problem + "; at the last η: " + last_problem +
+                                  "), and the pull cannot reach η = " + number(out.eta));
+      }
       for (size_t l = 0; l < pull.loops.size(); ++l) {
         if (pull.loops[l].curve.converged) continue;
         out.diagnostics.push_back(explain(sheet, sheet.loops[l], solids, pull.loops[l].stuck_points,
-                                          pull.loops[l].curve.max_after));
+                                          pull.loops[l].curve.max_after, eta));
       }
       return out;
     }

@@ -24,6 +24,22 @@ ExactMesh to_exact(const TriangleMesh& mesh);
 // Rounds to doubles; vertex order is the mesh's.
 TriangleMesh to_double(const ExactMesh& mesh);
 
+// The exact composition rounded to doubles (round.cpp). Corefining operands that nearly
+// coincide (a bolt in its bore exported separately: faces 1e-16 apart) gives edges far
+// shorter than double precision; rounding their ends independently folds the slivers
+// between them over their neighbours. Edges shorter than `tolerance` are first collapsed
+// in exact arithmetic onto the end that is an input vertex (exactly a double) when one is,
+// skipping collapses that would pinch the surface. No vertex moves by more than
+// `tolerance`; the caller checks the rounded mesh (closed, no self-intersections).
+struct Rounded {
+  TriangleMesh mesh;          // triangle_source = face index, as to_double
+  int collapsed = 0;          // edges collapsed
+  int blocked = 0;            // short edges left: collapsing them would pinch the surface
+  double longest = 0;         // longest edge collapsed, design units
+  std::vector<Vec3> where;    // kept ends of the first collapsed edges
+};
+Rounded round_to_doubles(ExactMesh mesh, double tolerance);
+
 // Orders exact points lexicographically (to merge and match vertices across meshes).
 struct PointLess {
   bool operator()(const ExactPoint& a, const ExactPoint& b) const {
