@@ -51,6 +51,11 @@ int main(int argc, char** argv) {
   std::printf("design: %ld triangles (h = %.4f, generated in %.2f s), %d organic components, %zu loops\n",
               static_cast<long>(result.design.triangles.rows()), h, generation.count(),
               result.partition.organic_components, result.partition.loops.size());
+  int fallback = 0, quads = 0;
+  for (const QuadStats& q : result.quads.stats) fallback += q.fallback, quads += q.quads;
+  std::printf("cages: %zu (%d quads; %d of them the fallback), composed: %s\n",
+              result.quads.cages.size(), quads, fallback,
+              result.composed.report.ok ? "ok" : "NOT ok");
   std::printf("%-10s %10s %16s\n", "stage", "seconds", "peak RSS (MiB)");
   double total = 0;
   for (const auto& t : result.timings) {
