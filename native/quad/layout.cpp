@@ -4,7 +4,9 @@
 // to quarter turns q; a valid patch is a disk whose boundary turns Σ(2 − q) = 4 with no
 // reflex (q = 3) node. Invalid patches are cut by more traces (a dangling separatrix is
 // continued, a reflex node continues its incoming curve, a non-disk is cut from the middle
-// of its longest arc); a wrong corner count is fixed by re-reading the most ambiguous angle.
+// of its longest arc); a wrong corner count is fixed by choosing the four nodes that best
+// make a rectangle (best_corners; options.fit_corners) or, the older way, by re-reading
+// the most ambiguous angle one at a time and, failing that, taking the four sharpest turns.
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -89,6 +91,46 @@ int next_on_boundary(const Surface& s, const Layout& layout, int h) {
   for (int guard = 0; layout.edge_curve[c >> 1] < 0 && guard < 256; ++guard)
     c = s.mesh.next_halfedge_handle(s.mesh.halfedge_handle(c ^ 1)).idx();
   return c;
+}
+
+// The four corners of a disk patch among the nodes of its boundary cycle that best make a
+// rectangle: corner angles near a quarter turn, other nodes near straight, and the two
+// pairs of opposite sides of nearly equal length (in target edges, as quantization needs
+// them equal). Exhaustive over the C(m, 4) choices of m nodes (m ≤ 40 here). Returns one
+// flag per node, or nothing when there are fewer than four nodes or too many.
+std::vector<char> best_corners(const std::vector<Corner>& nodes, const std::vector<double>& after,
+                               double* best_cost) {
+  const int m = static_cast<int>(nodes.size());
+  if (m < 4 || m > 40) return {};
+  auto cost_of = [&](const int (&c)[4]) {
+    double cost = 0;
+    for (int i = 0, k = 0; i < m; ++i) {
+      const bool corner = k < 4 && c[k] == i;
+      k += corner;
+      cost += std::abs(nodes[i].angle - (corner ? kPi / 2 : kPi)) / (kPi / 2);
+    }
+    double side[4] = {0, 0, 0, 0};
+    for (int k = 0; k < 4; ++k)
+      for (int i = c[k]; i != c[(k + 1) % 4]; i = (i + 1) % m) side[k] += after[i];
+    for (int k = 0; k < 2; ++k)
+      cost += 2 * std::abs(side[k] - side[k + 2]) / std::max(side[k] + side[k + 2], 1e-9);
+    return cost;
+  };
+  std::vector<char> best;
+  *best_cost = 1e300;
+  int c[4];
+  for (c[0] = 0; c[0] < m; ++c[0])
+    for (c[1] = c[0] + 1; c[1] < m; ++c[1])
+      for (c[2] = c[1] + 1; c[2] < m; ++c[2])
+        for (c[3] = c[2] + 1; c[3] < m; ++c[3]) {
+          const double cost = cost_of(c);
+          if (cost < *best_cost) {
+            *best_cost = cost;
+            best.assign(m, 0);
+            for (int k : c) best[k] = 1;
+          }
+        }
+  return best;
 }
 
 }  // namespace
@@ -260,7 +302,11 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       Cycle& cycle = cycles[0];
       int turning = 0;
       for (const Corner& k : cycle.nodes) turning += 2 - k.quarters;
-      if (turning != 4) {
+      // Target length of the arc after each node (nodes split the cycle into whole arcs).
+      std::vector<double> after;
+      for (const Corner& k : cycle.nodes)
+        after.push_back(out.arcs[out.halfedge_arc[k.halfedge_out] / 2].target);
+      if (turning != 4 && !options.fit_corners) {
         // Re-read the most ambiguous angle: a corner nearest to straight, or the reverse.
         Corner* pick = nullptr;
         for (Corner& k : cycle.nodes) {
@@ -273,6 +319,21 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           continue;
         }
         quarter_override[pick->halfedge_out] = turning > 4 ? 2 : 1;
+        ++out.recornered;
+        --p;  // re-examine the same patch with the new reading
+        continue;
+      }
+      if (turning != 4) {
+        // The best rectangle among the patch's nodes (best_corners).
+        double cost = 0;
+        const std::vector<char> best = best_corners(cycle.nodes, after, &cost);
+        if (best.empty()) {
+          fixes.push_back(middle_cuts(cycles));
+          force_corners(cycle, fixes.back());
+          continue;
+        }
+        for (size_t i = 0; i < best.size(); ++i)
+          quarter_override[cycle.nodes[i].halfedge_out] = best[i] ? 1 : 2;
         ++out.recornered;
         --p;  // re-examine the same patch with the new reading
         continue;

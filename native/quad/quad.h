@@ -55,6 +55,9 @@ struct QuadOptions {
   // Let separatrices pass transversally through earlier ones (fewer T-junctions, but
   // edge-snapped crossings leave sliver patches on level-set meshes: off by default).
   bool cross_separatrices = false;
+  // Patches whose angles do not give four corners: choose the four nodes that best make a
+  // rectangle (angles and opposite side lengths), or re-read one angle at a time (false).
+  bool fit_corners = true;
   // Rounds of extra cuts for patches that are not disks with four corners.
   int max_fix_rounds = 64;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
