@@ -1,5 +1,6 @@
 // pull/cage.cpp — §7.2 on a fitted cage: pull the limit boundary of every chain into its
 // solids, fade the move into the quad graph, tessellate the limit surface as the sheet.
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 #include <deque>
@@ -239,8 +240,9 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
   const LimitSurface before(cage);
   LimitSurface after(r);
   const int m = 4;
-  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(n_new, n_new),
-                  rhs = Eigen::MatrixXd::Zero(n_new, 3);
+  // Normal equations, sparse: each sample couples only the new points in its support.
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_new, 3);
   struct Sample {
     LimitWeights weights;
     Vec3 target;
@@ -268,7 +270,7 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
           if (a < n_old) continue;
           rhs.row(a - n_old) += wa * fixed.transpose();
           for (const auto& [b, wb] : s.weights) {
-            if (b >= n_old) normal(a - n_old, b - n_old) += wa * wb;
+            if (b >= n_old) entries.emplace_back(a - n_old, b - n_old, wa * wb);
           }
         }
         samples.push_back(std::move(s));
@@ -277,10 +279,14 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
   }
   const double lambda = 1e-6;
   for (int i = 0; i < n_new; ++i) {
-    normal(i, i) += lambda;
+    entries.emplace_back(i, i, lambda);
     rhs.row(i) += lambda * added[i].transpose();
   }
-  const Eigen::MatrixXd solved = normal.ldlt().solve(rhs);
+  Eigen::SparseMatrix<double> normal(n_new, n_new);
+  normal.setFromTriplets(entries.begin(), entries.end());  // sums repeated entries
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  Eigen::MatrixXd solved;
+  if (solver.info() == Eigen::Success) solved = solver.solve(rhs);
   const auto change = [&](const Vertices& points) {
     double worst = 0;
     for (const auto& s : samples) {
@@ -291,7 +297,7 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
     return worst;
   };
   out.midpoint_change = change(r.vertices);
-  if (solved.allFinite()) {
+  if (solved.rows() == n_new && solved.allFinite()) {
     Vertices fitted = r.vertices;
     fitted.bottomRows(n_new) = solved;
     out.limit_change = change(fitted);
@@ -444,6 +450,11 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
   QuadCage current = cage;
   std::vector<int> inserted(cage.boundary_chains.size(), 0);
   CagePull out = pull_once(current, chain_solids, solids, eta, options);
+  const Eigen::Index quad_limit =
+      static_cast<Eigen::Index>(
+          std::ceil(options.max_insertion_growth * static_cast<double>(cage.quads.rows()))) +
+      64;
+  int skipped = 0;  // quads of a refinement not made (over quad_limit)
   for (int round = 0; round < options.max_insertions && !out.sheet.converged(); ++round) {
     // The chain edges whose limit segment holds a stuck sample: chain_curve gives each
     // chain edge n limit samples, each followed by `sub` chord samples.
@@ -456,6 +467,12 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
     }
     if (edges.empty()) break;
     CageRefinement refined = refine_cage_boundary(current, edges);
+    // Strips cross the whole component: where most of the boundary is stuck (η deeper than
+    // the solid is thick, a gap) refinement would multiply the cage without helping.
+    if (refined.cage.quads.rows() > quad_limit) {
+      skipped = static_cast<int>(refined.cage.quads.rows());
+      break;
+    }
     for (size_t c = 0; c < inserted.size(); ++c) inserted[c] += refined.inserted_per_chain[c];
     current = std::move(refined.cage);
     out = pull_once(current, chain_solids, solids, eta, options);
@@ -468,6 +485,12 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
     if (inserted[c] > 0)
       counts += (counts.empty() ? "" : ", ") + std::string("chain ") + std::to_string(c) + " +" +
                 std::to_string(inserted[c]);
+  }
+  if (skipped > 0) {
+    out.sheet.diagnostics.push_back("cage of organic component " + std::to_string(cage.component) +
+                                    ": no further boundary vertex insertion: it would give " +
+                                    std::to_string(skipped) + " quads, more than " +
+                                    std::to_string(quad_limit) + " (the pull stays unconverged)");
   }
   if (total > 0) {
     out.sheet.diagnostics.push_back(

@@ -100,6 +100,10 @@ struct PullOptions {
   // §7.2 local refinement (pull_cage): rounds of boundary vertex insertion where a chain
   // does not converge, each followed by a new pull; 0 disables it.
   int max_insertions = 3;
+  // A refinement round is not made when the refined cage would have more than
+  // max_insertion_growth × the input cage's quads + 64 (strips cross the whole component;
+  // a boundary stuck nearly everywhere is not the local failure insertion is for).
+  double max_insertion_growth = 4.0;
 };
 
 struct CurvePull {
