@@ -421,7 +421,7 @@ bool is_subsequence(const std::vector<int>& whole, const std::vector<int>& sub) 
 
 }  // namespace
 
-TEST(Refine, StripSplitAcrossATubeReachesBothChains) {
+TEST(BoundaryInsertion, StripSplitAcrossATubeReachesBothChains) {
   const QuadCage cage = tube_cage(6, 3);
   ASSERT_EQ(cage_problems(cage), "");
   const CageRefinement r =
@@ -455,7 +455,7 @@ TEST(Refine, StripSplitAcrossATubeReachesBothChains) {
               r.limit_change, r.least_squares ? "least squares" : "midpoints", r.midpoint_change);
 }
 
-TEST(Refine, CrossingStripsCutAQuadInFourAndCreasesSplit) {
+TEST(BoundaryInsertion, CrossingStripsCutAQuadInFourAndCreasesSplit) {
   QuadCage cage = grid_cage(3, 1.0);
   ASSERT_EQ(cage_problems(cage), "");
   const auto& chain =
@@ -499,7 +499,7 @@ TEST(Refine, CrossingStripsCutAQuadInFourAndCreasesSplit) {
 // 1 + w): its rim must lie in the bars. The limit boundary of a coarse cage is a rounded
 // curve that cuts the frame's corners into the window; only finer boundary spacing near
 // the corners lets it turn inside the bars.
-TEST(Refine, PullConvergesOnlyWithInsertion) {
+TEST(BoundaryInsertion, PullConvergesOnlyWithInsertion) {
   const double w = 0.04, t = 0.2;
   std::vector<SolidInput> inputs;
   const double a = 1.0, b = 1.0 + w;
