@@ -137,6 +137,8 @@ ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPu
         out.diagnostics.push_back(explain(sheet, sheet.loops[l], solids, pull.loops[l].stuck_points,
                                           pull.loops[l].curve.max_after, eta));
       }
+      for (const auto& d : pull.diagnostics)
+        out.diagnostics.push_back(d);  // e.g. inserted vertices
       return out;
     }
     const ContactCut cut = cut_at_contact(pull.sheet, solid);

@@ -1,10 +1,13 @@
 // pull/cage.cpp — §7.2 on a fitted cage: pull the limit boundary of every chain into its
 // solids, fade the move into the quad graph, tessellate the limit surface as the sheet.
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
+#include <tuple>
 
 #include "fit/fit.h"
 #include "pull/detail/side.h"
@@ -112,7 +115,206 @@ OrganicSheet cage_sheet(const QuadCage& cage, const std::vector<std::vector<int>
   return sheet;
 }
 
-CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+CageRefinement refine_cage_boundary(const QuadCage& cage,
+                                    const std::vector<std::array<int, 2>>& edges) {
+  const auto directed = directed_edges(cage.quads);
+  const auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
+  // Walk each strip from its boundary edge; collect the undirected edges it cuts.
+  std::map<std::pair<int, int>, int> split;  // undirected edge -> new vertex (filled below)
+  CageRefinement out;
+  for (const auto& e : edges) {
+    auto it = directed.find({e[0], e[1]});
+    if (it == directed.end()) it = directed.find({e[1], e[0]});
+    GENBREP_CHECK(it != directed.end() && directed.count({it->first.second, it->first.first}) == 0,
+                  Code::Internal,
+                  "refine_cage_boundary: (" + std::to_string(e[0]) + ", " + std::to_string(e[1]) +
+                      ") is not a boundary edge of the cage");
+    std::set<std::pair<int, int>> crossed;  // (quad, entry edge parity)
+    auto [q, k] = it->second;
+    while (crossed.insert({q, k % 2}).second) {
+      ++out.strip_quads;
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      const int c = cage.quads(q, (k + 2) % 4), d = cage.quads(q, (k + 3) % 4);
+      split.emplace(key(a, b), -1);
+      split.emplace(key(c, d), -1);
+      const auto next = directed.find({d, c});  // the quad across the opposite edge
+      if (next == directed.end()) break;        // the strip reached the boundary
+      std::tie(q, k) = next->second;
+    }
+  }
+  // New vertices: one per cut edge (in edge order), one per quad cut both ways.
+  const int n_old = static_cast<int>(cage.vertices.rows());
+  std::vector<Vec3> added;
+  for (auto& [e, v] : split) {
+    v = n_old + static_cast<int>(added.size());
+    added.push_back(0.5 * (cage.vertices.row(e.first) + cage.vertices.row(e.second)).transpose());
+  }
+  // New quads, each with its old quad and the old parameters of its corners.
+  using Param = Eigen::Vector2d;
+  const Param unit[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  std::vector<std::array<int, 4>> quads;
+  std::vector<int> origin;
+  std::vector<std::array<Param, 4>> params;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    int c[4], m[4] = {-1, -1, -1, -1}, mask = 0;
+    Param pc[4], pm[4];
+    for (int k = 0; k < 4; ++k) {
+      c[k] = cage.quads(q, k);
+      pc[k] = unit[k];
+      pm[k] = 0.5 * (unit[k] + unit[(k + 1) % 4]);
+      const auto it = split.find(key(cage.quads(q, k), cage.quads(q, (k + 1) % 4)));
+      if (it != split.end()) m[k] = it->second, mask |= 1 << k;
+    }
+    const auto add = [&](std::array<int, 4> corners, std::array<Param, 4> p) {
+      quads.push_back(corners);
+      origin.push_back(static_cast<int>(q));
+      params.push_back(p);
+    };
+    if (mask == 0) {
+      add({c[0], c[1], c[2], c[3]}, {pc[0], pc[1], pc[2], pc[3]});
+    } else if (mask == 0b0101 || mask == 0b1010) {
+      const int k = mask == 0b0101 ? 0 : 1, k1 = (k + 1) % 4, k2 = (k + 2) % 4, k3 = (k + 3) % 4;
+      add({c[k], m[k], m[k2], c[k3]}, {pc[k], pm[k], pm[k2], pc[k3]});
+      add({m[k], c[k1], c[k2], m[k2]}, {pm[k], pc[k1], pc[k2], pm[k2]});
+    } else {
+      GENBREP_CHECK(mask == 0b1111, Code::Internal,
+                    "refine_cage_boundary: a quad is cut on adjacent edges only");
+      const int x = n_old + static_cast<int>(added.size());
+      Vec3 centre = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) centre += 0.25 * cage.vertices.row(c[k]).transpose();
+      added.push_back(centre);
+      for (int k = 0; k < 4; ++k) {
+        const int l = (k + 3) % 4;
+        add({c[k], m[k], x, m[l]}, {pc[k], pm[k], Param(0.5, 0.5), pm[l]});
+      }
+    }
+  }
+  QuadCage& r = out.cage;
+  r = cage;
+  r.vertices.resize(n_old + static_cast<Eigen::Index>(added.size()), 3);
+  r.vertices.topRows(n_old) = cage.vertices;
+  for (size_t i = 0; i < added.size(); ++i)
+    r.vertices.row(n_old + static_cast<Eigen::Index>(i)) = added[i].transpose();
+  r.quads.resize(static_cast<Eigen::Index>(quads.size()), 4);
+  for (size_t q = 0; q < quads.size(); ++q) {
+    for (int k = 0; k < 4; ++k) r.quads(static_cast<Eigen::Index>(q), k) = quads[q][k];
+  }
+  for (size_t ch = 0; ch < cage.boundary_chains.size(); ++ch) {
+    const auto& chain = cage.boundary_chains[ch];
+    std::vector<int> refined;
+    for (size_t i = 0; i < chain.size(); ++i) {
+      refined.push_back(chain[i]);
+      const auto it = split.find(key(chain[i], chain[(i + 1) % chain.size()]));
+      if (it != split.end()) refined.push_back(it->second);
+    }
+    out.inserted_per_chain.push_back(static_cast<int>(refined.size() - chain.size()));
+    r.boundary_chains[ch] = std::move(refined);
+  }
+  r.crease_edges.clear();
+  r.crease_values.clear();
+  for (size_t i = 0; i < cage.crease_edges.size(); ++i) {
+    const auto [a, b] = cage.crease_edges[i];
+    const float value = i < cage.crease_values.size() ? cage.crease_values[i] : 0.0f;
+    const auto it = split.find(key(a, b));
+    if (it == split.end()) {
+      r.crease_edges.push_back({a, b});
+      r.crease_values.push_back(value);
+    } else {
+      r.crease_edges.push_back({a, it->second});
+      r.crease_edges.push_back({it->second, b});
+      r.crease_values.insert(r.crease_values.end(), 2, value);
+    }
+  }
+  if (added.empty()) return out;
+  // Least-squares positions of the new points: the new limit closest to the old one on the
+  // quads whose limit they influence (quads within one vertex ring of a cut quad).
+  const int n_new = static_cast<int>(added.size());
+  const int n_all = n_old + n_new;
+  std::vector<char> near(static_cast<size_t>(n_all), 0);
+  for (size_t q = 0; q < quads.size(); ++q) {
+    bool cut = false;
+    for (int v : quads[q]) cut = cut || v >= n_old;
+    if (cut)
+      for (int v : quads[q]) near[v] = 1;
+  }
+  const LimitSurface before(cage);
+  LimitSurface after(r);
+  const int m = 4;
+  // Normal equations, sparse: each sample couples only the new points in its support.
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n_new, 3);
+  struct Sample {
+    LimitWeights weights;
+    Vec3 target;
+  };
+  std::vector<Sample> samples;
+  for (size_t q = 0; q < quads.size(); ++q) {
+    bool touched = false;
+    for (int v : quads[q]) touched = touched || near[v];
+    if (!touched) continue;
+    for (int i = 0; i <= m; ++i) {
+      for (int j = 0; j <= m; ++j) {
+        const double u = static_cast<double>(i) / m, v = static_cast<double>(j) / m;
+        const auto& p = params[q];
+        const Param old =
+            (1 - u) * (1 - v) * p[0] + u * (1 - v) * p[1] + u * v * p[2] + (1 - u) * v * p[3];
+        Sample s{after.weights(static_cast<int>(q), u, v), Vec3::Zero()};
+        for (const auto& [index, w] : before.weights(origin[q], old.x(), old.y())) {
+          s.target += w * cage.vertices.row(index).transpose();
+        }
+        Vec3 fixed = s.target;
+        for (const auto& [index, w] : s.weights) {
+          if (index < n_old) fixed -= w * cage.vertices.row(index).transpose();
+        }
+        for (const auto& [a, wa] : s.weights) {
+          if (a < n_old) continue;
+          rhs.row(a - n_old) += wa * fixed.transpose();
+          for (const auto& [b, wb] : s.weights) {
+            if (b >= n_old) entries.emplace_back(a - n_old, b - n_old, wa * wb);
+          }
+        }
+        samples.push_back(std::move(s));
+      }
+    }
+  }
+  const double lambda = 1e-6;
+  for (int i = 0; i < n_new; ++i) {
+    entries.emplace_back(i, i, lambda);
+    rhs.row(i) += lambda * added[i].transpose();
+  }
+  Eigen::SparseMatrix<double> normal(n_new, n_new);
+  normal.setFromTriplets(entries.begin(), entries.end());  // sums repeated entries
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+  Eigen::MatrixXd solved;
+  if (solver.info() == Eigen::Success) solved = solver.solve(rhs);
+  const auto change = [&](const Vertices& points) {
+    double worst = 0;
+    for (const auto& s : samples) {
+      Vec3 p = Vec3::Zero();
+      for (const auto& [index, w] : s.weights) p += w * points.row(index).transpose();
+      worst = std::max(worst, (p - s.target).norm());
+    }
+    return worst;
+  };
+  out.midpoint_change = change(r.vertices);
+  if (solved.rows() == n_new && solved.allFinite()) {
+    Vertices fitted = r.vertices;
+    fitted.bottomRows(n_new) = solved;
+    out.limit_change = change(fitted);
+    if (out.limit_change <= out.midpoint_change) {
+      r.vertices = fitted;
+      out.least_squares = true;
+      return out;
+    }
+  }
+  out.limit_change = out.midpoint_change;  // the solve did not help: keep the midpoints
+  return out;
+}
+
+namespace {
+
+// One pull of `cage` (no insertion): the §7.2 descent, the fade, the re-pull rounds.
+CagePull pull_once(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
                    const SolidSet& solids, double eta, const PullOptions& options) {
   GENBREP_CHECK(chain_solids.size() == cage.boundary_chains.size(), Code::Internal,
                 "pull_cage needs the solids of every boundary chain");
@@ -235,6 +437,66 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
                                     std::to_string(out.sheet.folded_triangles) +
                                     " limit triangles fold after the pull even with " +
                                     std::to_string(out.sheet.blend_rings) + " blend rings");
+  }
+  return out;
+}
+
+}  // namespace
+
+CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                   const SolidSet& solids, double eta, const PullOptions& options) {
+  const int n = std::max(1, options.cage_samples_per_edge),
+            sub = std::max(1, options.samples_per_edge);
+  QuadCage current = cage;
+  std::vector<int> inserted(cage.boundary_chains.size(), 0);
+  CagePull out = pull_once(current, chain_solids, solids, eta, options);
+  const Eigen::Index quad_limit =
+      static_cast<Eigen::Index>(
+          std::ceil(options.max_insertion_growth * static_cast<double>(cage.quads.rows()))) +
+      64;
+  int skipped = 0;  // quads of a refinement not made (over quad_limit)
+  for (int round = 0; round < options.max_insertions && !out.sheet.converged(); ++round) {
+    // The chain edges whose limit segment holds a stuck sample: chain_curve gives each
+    // chain edge n limit samples, each followed by `sub` chord samples.
+    std::vector<std::array<int, 2>> edges;
+    for (size_t c = 0; c < current.boundary_chains.size(); ++c) {
+      const auto& chain = current.boundary_chains[c];
+      std::set<int> stuck_edges;
+      for (int s : out.sheet.loops[c].curve.stuck_samples) stuck_edges.insert(s / sub / n);
+      for (int i : stuck_edges) edges.push_back({chain[i], chain[(i + 1) % chain.size()]});
+    }
+    if (edges.empty()) break;
+    CageRefinement refined = refine_cage_boundary(current, edges);
+    // Strips cross the whole component: where most of the boundary is stuck (η deeper than
+    // the solid is thick, a gap) refinement would multiply the cage without helping.
+    if (refined.cage.quads.rows() > quad_limit) {
+      skipped = static_cast<int>(refined.cage.quads.rows());
+      break;
+    }
+    for (size_t c = 0; c < inserted.size(); ++c) inserted[c] += refined.inserted_per_chain[c];
+    current = std::move(refined.cage);
+    out = pull_once(current, chain_solids, solids, eta, options);
+  }
+  std::string counts;
+  int total = 0;
+  for (size_t c = 0; c < inserted.size(); ++c) {
+    out.sheet.loops[c].inserted_vertices = inserted[c];
+    total += inserted[c];
+    if (inserted[c] > 0)
+      counts += (counts.empty() ? "" : ", ") + std::string("chain ") + std::to_string(c) + " +" +
+                std::to_string(inserted[c]);
+  }
+  if (skipped > 0) {
+    out.sheet.diagnostics.push_back("cage of organic component " + std::to_string(cage.component) +
+                                    ": no further boundary vertex insertion: it would give " +
+                                    std::to_string(skipped) + " quads, more than " +
+                                    std::to_string(quad_limit) + " (the pull stays unconverged)");
+  }
+  if (total > 0) {
+    out.sheet.diagnostics.push_back(
+        "cage of organic component " + std::to_string(cage.component) + ": " +
+        std::to_string(total) + " boundary vertices inserted where the pull did not converge (" +
+        counts + "), pull " + (out.sheet.converged() ? "converged" : "still not converged"));
   }
   return out;
 }

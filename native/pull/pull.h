@@ -15,6 +15,7 @@
 // reported with the points that stay outside (a gap between solids, §9.1), never hidden.
 // Complexity: O(iterations · samples · |S| · log |T_S|) distance queries per loop.
 #pragma once
+#include <array>
 #include <vector>
 
 #include "core/cage.h"
@@ -96,6 +97,13 @@ struct PullOptions {
   int cage_samples_per_edge = 4;
   int cage_blend_rings = 2;     // rings of the quad graph the boundary move fades over
   int cage_max_blend_rings = 8; // doubled up to this while a tessellation triangle folds
+  // §7.2 local refinement (pull_cage): rounds of boundary vertex insertion where a chain
+  // does not converge, each followed by a new pull; 0 disables it.
+  int max_insertions = 3;
+  // A refinement round is not made when the refined cage would have more than
+  // max_insertion_growth × the input cage's quads + 64 (strips cross the whole component;
+  // a boundary stuck nearly everywhere is not the local failure insertion is for).
+  double max_insertion_growth = 4.0;
 };
 
 struct CurvePull {
@@ -117,6 +125,7 @@ struct LoopPull {
   CurvePull curve;
   double max_displacement = 0;   // design units
   std::vector<Vec3> stuck_points;  // positions of samples still above η
+  int inserted_vertices = 0;       // cages: boundary vertices inserted into this chain (§7.2)
 };
 
 struct SheetPull {
@@ -144,6 +153,32 @@ SheetPull pull_sheet(const OrganicSheet& sheet, const SolidSet& solids, double e
 OrganicSheet cage_sheet(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
                         int samples_per_edge);
 
+// §7.2's "local insertion of a new boundary vertex" on a quad cage, kept pure-quad,
+// manifold and free of T-junctions: each listed boundary edge (a, b) (either direction) is
+// split at its midpoint and the split is carried across its quad strip — every quad the
+// strip enters is cut in two through the midpoints of the entry edge and its opposite edge
+// — until the strip reaches a boundary edge again (that edge's chain gets a vertex too) or
+// closes on itself. A quad crossed by two strips is cut in four around a new centre point.
+// Chains get the new vertices in order, creased edges become two creased edges, quads keep
+// their orientation; old vertices keep their indices, new ones follow.
+// Positions: the new control points (and nothing else) are the least-squares solution
+// that keeps the limit surface closest to the old one at 5×5 samples on every quad whose
+// limit they influence (old limit evaluated at the same parameters of the old quad), with
+// a 1e-6 pull towards the edge midpoints / quad centres for uniqueness; the midpoints are
+// kept instead when they give the smaller maximal change.
+// Throws Error{Internal} when an edge is not a boundary edge of the cage.
+struct CageRefinement {
+  QuadCage cage;
+  std::vector<int> inserted_per_chain;  // new vertices per boundary chain
+  int strip_quads = 0;                  // old quads cut (the strips' lengths, summed)
+  double midpoint_change = 0;  // max |S_new − S_old| at the samples with midpoint positions
+  double limit_change = 0;     // the same with the positions kept
+  bool least_squares = false;  // kept the least-squares positions (they changed the limit's
+                               // maximum less than the midpoints; else the midpoints)
+};
+CageRefinement refine_cage_boundary(const QuadCage& cage,
+                                    const std::vector<std::array<int, 2>>& edges);
+
 struct CagePull {
   QuadCage cage;   // the pulled cage: boundary control points moved, the move faded inward
   SheetPull sheet; // its limit tessellation (cage_sheet); loops[i] ↔ chain i; η, per-loop
@@ -158,6 +193,11 @@ struct CagePull {
 // limit boundary near irregular vertices can depend on interior points) is re-pulled, at
 // most 3 rounds. chain_solids[i]: the solids chain i borders. σ per chain as for sheets,
 // on the unpulled tessellation.
+// Where a chain still does not converge, the boundary edges holding its stuck samples are
+// refined (refine_cage_boundary) on the unpulled cage, which is then pulled again from the
+// start: at most options.max_insertions rounds. The returned cage is the refined one (its
+// topology can differ from `cage`); LoopPull::inserted_vertices counts per chain and a
+// diagnostic names the chains that got vertices.
 CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
                    const SolidSet& solids, double eta, const PullOptions& options);
 

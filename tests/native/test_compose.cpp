@@ -9,12 +9,15 @@
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <algorithm>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 
 #include "compose/compose.h"
 #include "incidence/incidence.h"
@@ -314,6 +317,247 @@ TEST(Pull, CubicBsplineCurveReproducesItsControlPolygonAverages) {
     }
   }
   EXPECT_NEAR(sum, 1, 1e-15);
+}
+
+// ---- §7.2 local refinement: boundary vertex insertion on cages ----
+
+namespace {
+
+// A k×k planar grid cage over [-s, s]² at z = 0, quads counter-clockwise seen from +z, one
+// chain counter-clockwise around it (organic side on the left).
+QuadCage grid_cage(int k, double s) {
+  QuadCage cage;
+  cage.component = 0;
+  const auto id = [k](int i, int j) { return j * (k + 1) + i; };
+  cage.vertices.resize((k + 1) * (k + 1), 3);
+  for (int j = 0; j <= k; ++j) {
+    for (int i = 0; i <= k; ++i)
+      cage.vertices.row(id(i, j)) = Vec3(-s + 2 * s * i / k, -s + 2 * s * j / k, 0).transpose();
+  }
+  cage.quads.resize(k * k, 4);
+  for (int j = 0; j < k; ++j) {
+    for (int i = 0; i < k; ++i)
+      cage.quads.row(j * k + i) << id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1);
+  }
+  std::vector<int> chain;
+  for (int i = 0; i < k; ++i) chain.push_back(id(i, 0));
+  for (int j = 0; j < k; ++j) chain.push_back(id(k, j));
+  for (int i = k; i > 0; --i) chain.push_back(id(i, k));
+  for (int j = k; j > 0; --j) chain.push_back(id(0, j));
+  cage.boundary_chains = {chain};
+  cage.chain_loop = {0};
+  return cage;
+}
+
+// A tube of m quads around (radius 1, axis z) and r rings of quads along z ∈ [0, r]: two
+// chains, bottom and top, quads facing outward.
+QuadCage tube_cage(int m, int r) {
+  QuadCage cage;
+  cage.component = 0;
+  const auto id = [m](int a, int l) { return l * m + (a % m); };
+  cage.vertices.resize(m * (r + 1), 3);
+  for (int l = 0; l <= r; ++l) {
+    for (int a = 0; a < m; ++a) {
+      const double t = 2 * M_PI * a / m;
+      cage.vertices.row(id(a, l)) = Vec3(std::cos(t), std::sin(t), l).transpose();
+    }
+  }
+  cage.quads.resize(m * r, 4);
+  for (int l = 0; l < r; ++l) {
+    for (int a = 0; a < m; ++a)
+      cage.quads.row(l * m + a) << id(a, l), id(a + 1, l), id(a + 1, l + 1), id(a, l + 1);
+  }
+  std::vector<int> bottom, top;
+  for (int a = 0; a < m; ++a) bottom.push_back(id(a, 0));
+  for (int a = m; a > 0; --a) top.push_back(id(a, r));
+  cage.boundary_chains = {bottom, top};
+  cage.chain_loop = {0, 1};
+  return cage;
+}
+
+// Problems of a cage as a pure-quad, manifold, consistently oriented mesh without
+// T-junctions whose boundary is exactly its chains (empty: none). Independent of pull/.
+std::string cage_problems(const QuadCage& cage) {
+  std::string out;
+  const int n = static_cast<int>(cage.vertices.rows());
+  std::map<std::pair<int, int>, int> directed;
+  std::vector<int> used(static_cast<size_t>(n), 0);
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
+    std::set<int> corners;
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      if (a < 0 || a >= n) return "quad " + std::to_string(q) + " has an index out of range";
+      corners.insert(a);
+      ++used[a];
+      if (++directed[{a, b}] > 1) out += " directed edge used twice (orientation or manifoldness);";
+    }
+    if (corners.size() != 4) out += " quad " + std::to_string(q) + " repeats a corner;";
+  }
+  for (int v = 0; v < n; ++v)
+    if (!used[v]) out += " vertex " + std::to_string(v) + " unused;";
+  std::set<std::pair<int, int>> boundary, chains;
+  for (const auto& [e, count] : directed)
+    if (!directed.count({e.second, e.first})) boundary.insert(e);
+  for (const auto& chain : cage.boundary_chains) {
+    for (size_t i = 0; i < chain.size(); ++i) {
+      if (!chains.insert({chain[i], chain[(i + 1) % chain.size()]}).second)
+        out += " a chain edge repeats;";
+    }
+  }
+  if (boundary != chains) {
+    out += " boundary edges (" + std::to_string(boundary.size()) + ") are not the chain edges (" +
+           std::to_string(chains.size()) + "): a T-junction or a wrong chain;";
+  }
+  return out;
+}
+
+// `sub` contains `whole`'s elements in the same cyclic order, starting at the same vertex.
+bool is_subsequence(const std::vector<int>& whole, const std::vector<int>& sub) {
+  size_t i = 0;
+  for (int v : sub)
+    if (i < whole.size() && whole[i] == v) ++i;
+  return i == whole.size() && !sub.empty() && sub[0] == whole[0];
+}
+
+}  // namespace
+
+TEST(BoundaryInsertion, StripSplitAcrossATubeReachesBothChains) {
+  const QuadCage cage = tube_cage(6, 3);
+  ASSERT_EQ(cage_problems(cage), "");
+  const CageRefinement r =
+      refine_cage_boundary(cage, {{cage.boundary_chains[0][2], cage.boundary_chains[0][3]}});
+  EXPECT_EQ(cage_problems(r.cage), "");
+  EXPECT_EQ(r.strip_quads, 3);
+  EXPECT_EQ(r.cage.quads.rows(), cage.quads.rows() + 3);        // grown by the strip length
+  EXPECT_EQ(r.cage.vertices.rows(), cage.vertices.rows() + 4);  // one per cut edge
+  ASSERT_EQ(r.inserted_per_chain, (std::vector<int>{1, 1}));
+  for (size_t c = 0; c < 2; ++c) {
+    ASSERT_EQ(r.cage.boundary_chains[c].size(), cage.boundary_chains[c].size() + 1);
+    EXPECT_TRUE(is_subsequence(cage.boundary_chains[c], r.cage.boundary_chains[c]));
+  }
+  // The new bottom vertex sits between old chain vertices 2 and 3.
+  EXPECT_EQ(r.cage.boundary_chains[0][2], cage.boundary_chains[0][2]);
+  EXPECT_GE(r.cage.boundary_chains[0][3], cage.vertices.rows());
+  EXPECT_EQ(r.cage.boundary_chains[0][4], cage.boundary_chains[0][3]);
+  // Every quad faces outward (the tube's radial direction).
+  for (Eigen::Index q = 0; q < r.cage.quads.rows(); ++q) {
+    const Vec3 a = r.cage.vertices.row(r.cage.quads(q, 0)),
+               b = r.cage.vertices.row(r.cage.quads(q, 1)),
+               c = r.cage.vertices.row(r.cage.quads(q, 2));
+    const Vec3 centre = 0.5 * (a + c);
+    EXPECT_GT((b - a).cross(c - a).dot(Vec3(centre.x(), centre.y(), 0)), 0) << "quad " << q;
+  }
+  // The chains still follow the limit tessellation's boundary (cage_sheet checks it).
+  EXPECT_NO_THROW(cage_sheet(r.cage, {{0}, {0}}, 4));
+  // The least-squares positions change the limit less than the midpoints would.
+  EXPECT_LE(r.limit_change, r.midpoint_change);
+  std::printf("[refine] tube 6x3: max limit change %.3g (%s kept), %.3g with midpoints\n",
+              r.limit_change, r.least_squares ? "least squares" : "midpoints", r.midpoint_change);
+}
+
+TEST(BoundaryInsertion, CrossingStripsCutAQuadInFourAndCreasesSplit) {
+  QuadCage cage = grid_cage(3, 1.0);
+  ASSERT_EQ(cage_problems(cage), "");
+  const auto& chain =
+      cage.boundary_chains[0];  // 12 vertices: bottom 0..2, right 3..5, top 6..8, left 9..11
+  cage.crease_edges = {{chain[1], chain[2]}, {chain[3], chain[4]}};
+  cage.crease_values = {1.0f, 0.5f};
+  // The middle bottom edge (strip goes up) and the middle left edge (strip goes right):
+  // they cross in the centre quad.
+  const CageRefinement r =
+      refine_cage_boundary(cage, {{chain[1], chain[2]}, {chain[10], chain[11]}});
+  EXPECT_EQ(cage_problems(r.cage), "");
+  EXPECT_EQ(r.strip_quads, 6);
+  EXPECT_EQ(r.cage.quads.rows(), 16);     // 9 + 3 + 3 + 1 (the crossing quad is cut in four)
+  EXPECT_EQ(r.cage.vertices.rows(), 25);  // 16 + 8 cut edges + 1 centre
+  ASSERT_EQ(r.inserted_per_chain, (std::vector<int>{4}));  // each strip enters and leaves the chain
+  EXPECT_TRUE(is_subsequence(chain, r.cage.boundary_chains[0]));
+  for (Eigen::Index q = 0; q < r.cage.quads.rows(); ++q) {
+    const Vec3 a = r.cage.vertices.row(r.cage.quads(q, 0)),
+               b = r.cage.vertices.row(r.cage.quads(q, 1)),
+               c = r.cage.vertices.row(r.cage.quads(q, 2));
+    EXPECT_GT((b - a).cross(c - a).z(), 0) << "quad " << q;
+  }
+  // The split crease is two creased edges with its value; the other one is unchanged.
+  const int m = r.cage.boundary_chains[0][2];
+  EXPECT_GE(m, 16);
+  using E = std::array<int, 2>;
+  EXPECT_EQ(r.cage.crease_edges,
+            (std::vector<E>{{chain[1], m}, {m, chain[2]}, {chain[3], chain[4]}}));
+  EXPECT_EQ(r.cage.crease_values, (std::vector<float>{1.0f, 1.0f, 0.5f}));
+  EXPECT_NO_THROW(cage_sheet(r.cage, {{0}}, 4));
+  EXPECT_LE(r.limit_change, r.midpoint_change);
+  std::printf(
+      "[refine] grid 3x3, crossing strips: max limit change %.3g (%s kept), %.3g with midpoints\n",
+      r.limit_change, r.least_squares ? "least squares" : "midpoints", r.midpoint_change);
+  // A planar cage stays planar; an interior edge is refused.
+  EXPECT_LT(r.cage.vertices.col(2).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_THROW(refine_cage_boundary(cage, {{5, 6}}), Error);
+}
+
+// A membrane spanning a square window frame (four keep-in bars, inner half-width 1, outer
+// 1 + w): its rim must lie in the bars. The limit boundary of a coarse cage is a rounded
+// curve that cuts the frame's corners into the window; only finer boundary spacing near
+// the corners lets it turn inside the bars.
+TEST(BoundaryInsertion, PullConvergesOnlyWithInsertion) {
+  const double w = 0.04, t = 0.2;
+  std::vector<SolidInput> inputs;
+  const double a = 1.0, b = 1.0 + w;
+  const std::pair<Vec3, Vec3> bars[4] = {{Vec3(a, -b, -t), Vec3(b, b, t)},
+                                         {Vec3(-b, -b, -t), Vec3(-a, b, t)},
+                                         {Vec3(-b, a, -t), Vec3(b, b, t)},
+                                         {Vec3(-b, -b, -t), Vec3(b, -a, t)}};
+  for (int i = 0; i < 4; ++i) {
+    inputs.push_back(
+        {"bar" + std::to_string(i), Role::KeepIn,
+         prepare_closed_mesh(box_mesh(bars[i].first, bars[i].second), "bar", nullptr)});
+  }
+  const SolidSet solids(inputs, nullptr);
+  const QuadCage cage = grid_cage(2, 1.0 + w / 2);
+  const std::vector<std::vector<int>> chain_solids = {{0, 1, 2, 3}};
+  const double eta = -1e-3;
+  PullOptions without;
+  without.max_insertions = 0;
+  const CagePull coarse = pull_cage(cage, chain_solids, solids, eta, without);
+  ASSERT_EQ(coarse.sheet.loops.size(), 1u);
+  EXPECT_FALSE(coarse.sheet.loops[0].curve.converged);
+  EXPECT_EQ(coarse.sheet.loops[0].inserted_vertices, 0);
+  EXPECT_EQ(coarse.cage.quads, cage.quads);
+  const CagePull refined = pull_cage(cage, chain_solids, solids, eta, PullOptions{});
+  ASSERT_EQ(refined.sheet.loops.size(), 1u);
+  const LoopPull& loop = refined.sheet.loops[0];
+  EXPECT_TRUE(loop.curve.converged)
+      << "max F after " << loop.curve.max_after << joined(refined.sheet.diagnostics);
+  EXPECT_GT(loop.inserted_vertices, 0);
+  EXPECT_EQ(cage_problems(refined.cage), "");
+  EXPECT_EQ(static_cast<int>(refined.cage.boundary_chains[0].size()),
+            static_cast<int>(cage.boundary_chains[0].size()) + loop.inserted_vertices);
+  EXPECT_TRUE(is_subsequence(cage.boundary_chains[0], refined.cage.boundary_chains[0]));
+  // Independently of pull_curve: every vertex of the pulled limit tessellation's boundary
+  // loop lies inside a bar, at least |η| deep.
+  const auto deepest_worst = [&](int n) {
+    const OrganicSheet sheet = cage_sheet(refined.cage, chain_solids, n);
+    double worst = -1;
+    for (int v : sheet.loops[0].vertices) {
+      const Vec3 p = sheet.mesh.vertices.row(v);
+      double d = std::numeric_limits<double>::infinity();
+      for (const auto& [lo, hi] : bars) d = std::min(d, box_sdf(p, lo, hi));
+      worst = std::max(worst, d);
+    }
+    return worst;
+  };
+  const double worst = deepest_worst(4);  // the tessellation compose uses
+  EXPECT_LE(worst, eta * (1 - 1e-9));
+  EXPECT_LT(deepest_worst(16), 0);  // and the limit curve between its samples
+  std::printf(
+      "[refine] frame w=%.2f: without insertion max F %.3g (converged %d); with: %d vertices "
+      "inserted, "
+      "%d quads, max F %.3g, tessellation boundary max D %.3g\n",
+      w, coarse.sheet.loops[0].curve.max_after, coarse.sheet.loops[0].curve.converged,
+      loop.inserted_vertices, static_cast<int>(refined.cage.quads.rows()), loop.curve.max_after,
+      worst);
+  ASSERT_FALSE(refined.sheet.diagnostics.empty());
+  EXPECT_NE(refined.sheet.diagnostics.back().find("boundary vertices inserted"), std::string::npos);
 }
 
 // ---- Composition from fitted cages (pipeline) and recompose from edited cages ----
