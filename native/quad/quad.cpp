@@ -142,13 +142,29 @@ QuadResult extract_cages(const TriMesh& design, const Partition& partition,
 
 namespace {
 
+// Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
+// reported.
+QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& design,
+                            QuadCage* cage, Diagnostics* diagnostics) {
+  QuadStats stats = measure_cage(*cage, design);
+  if (!stats.flipped_quads && !stats.degenerate_quads) return stats;
+  const int bad = stats.flipped_quads + stats.degenerate_quads;
+  const int moved = quad_detail::untangle_cage(surface, *cage, 24);
+  stats = measure_cage(*cage, design);
+  diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
+                         std::to_string(bad) + " degenerate or flipped quads after filling; " +
+                         std::to_string(moved) + " cage vertices around them smoothed, " +
+                         std::to_string(stats.flipped_quads + stats.degenerate_quads) + " left");
+  return stats;
+}
+
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid.
-void extract_once(const TriMesh& design, const Partition& partition, const CrossField& field,
-                  const QuadOptions& options, int c, QuadCage* cage, QuadStats* stats,
+void extract_once(const quad_detail::Surface& surface, const TriMesh& design,
+                  const QuadOptions& options, QuadCage* cage, QuadStats* stats,
                   Diagnostics* diagnostics) {
   const auto start = std::chrono::steady_clock::now();
-  const quad_detail::Surface surface(design, partition, field, c);
+  const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
   quad_detail::trace_separatrices(surface, layout, options, *diagnostics);
   quad_detail::PatchLayout patches =
@@ -162,16 +178,7 @@ void extract_once(const TriMesh& design, const Partition& partition, const Cross
     diagnostics->push_back("component " + std::to_string(c) +
                            ": the layout's sides balance only with some interior arcs at 0 edges");
   *cage = quad_detail::fill_patches(surface, layout, patches, *diagnostics);
-  *stats = measure_cage(*cage, design);
-  if (stats->flipped_quads || stats->degenerate_quads) {
-    const int bad = stats->flipped_quads + stats->degenerate_quads;
-    const int moved = quad_detail::untangle_cage(surface, *cage, 24);
-    *stats = measure_cage(*cage, design);
-    diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(bad) +
-                           " degenerate or flipped quads after filling; " + std::to_string(moved) +
-                           " cage vertices around them smoothed, " +
-                           std::to_string(stats->flipped_quads + stats->degenerate_quads) + " left");
-  }
+  *stats = measure_untangled(surface, design, cage, diagnostics);
   stats->patches = static_cast<int>(patches.patches.size());
   stats->separatrices = layout.separatrices;
   stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -224,6 +231,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       }
       variants.push_back({name, o});
     }
+  const quad_detail::Surface surface(design, partition, field, c);
   std::string first_failure, requested_failure;
   int best = -1;
   QuadCage best_cage;
@@ -234,7 +242,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     QuadStats stats;
     Diagnostics diagnostics;
     try {
-      extract_once(design, partition, field, variants[k].options, c, &cage, &stats, &diagnostics);
+      extract_once(surface, design, variants[k].options, &cage, &stats, &diagnostics);
     } catch (const Error& e) {
       if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
       if (first_failure.empty()) first_failure = e.what();
@@ -264,7 +272,6 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   }
   // Last resort: the split coarse remesh, valid by construction but not field-aligned.
   // A coarse remesh of a thin part can fold; then it is made finer.
-  const quad_detail::Surface surface(design, partition, field, c);
   double size = 0;
   for (int v : surface.vertices) size += surface.vertex_size[v];
   size /= std::max<size_t>(1, surface.vertices.size()) * options.density;
@@ -272,13 +279,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   QuadCage cage;
   QuadStats stats;
   double scale = 0;
+  Diagnostics untangled;  // of the rejected tries too: only the last one's is kept
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
     cage = quad_detail::fallback_cage(surface, factor * size);
-    stats = measure_cage(cage, design);
-    if (stats.flipped_quads || stats.degenerate_quads) {
-      quad_detail::untangle_cage(surface, cage, 24);
-      stats = measure_cage(cage, design);
-    }
+    untangled.clear();
+    stats = measure_untangled(surface, design, &cage, &untangled);
     scale = factor;
     if (!stats.flipped_quads && !stats.degenerate_quads) break;
   }
@@ -294,6 +299,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       first_failure + "); the cage is the FALLBACK: a coarse remesh (edge " + scale_text +
       " x the target) split into quads, not aligned with the field, "
       "with irregular vertices wherever triangles could not be paired");
+  out->diagnostics.insert(out->diagnostics.end(), untangled.begin(), untangled.end());
   out->cages.push_back(std::move(cage));
   out->stats.push_back(stats);
 }
