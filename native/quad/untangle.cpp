@@ -27,12 +27,10 @@ int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds) {
   const int nv = static_cast<int>(cage.vertices.rows());
   const int nq = static_cast<int>(cage.quads.rows());
   std::vector<std::set<int>> neighbours(nv);
-  std::vector<std::vector<int>> quads_of(nv);
   for (int q = 0; q < nq; ++q)
     for (int k = 0; k < 4; ++k) {
       const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
       neighbours[a].insert(b), neighbours[b].insert(a);
-      quads_of[a].push_back(q);
     }
   std::vector<char> fixed(nv, 0);
   for (const auto& chain : cage.boundary_chains)
