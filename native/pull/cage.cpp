@@ -3,7 +3,6 @@
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <map>
 #include <set>
@@ -359,34 +358,20 @@ CagePull pull_once(const QuadCage& cage, const std::vector<std::vector<int>>& ch
     }
     // Ring 0 and its displacement; BFS rings over the quad graph.
     std::vector<int> ring(static_cast<size_t>(n_points), -1);
-    std::deque<int> queue;
     for (const auto& chain : cage.boundary_chains) {
-      for (int v : chain) if (ring[v] < 0) ring[v] = 0, queue.push_back(v);
+      for (int v : chain) ring[v] = 0;
     }
     for (int v = 0; v < n_points; ++v) {
-      if (ring[v] < 0 && (controls[v] - original.row(v).transpose()).squaredNorm() > 0) ring[v] = 0, queue.push_back(v);
+      if ((controls[v] - original.row(v).transpose()).squaredNorm() > 0) ring[v] = 0;
     }
-    while (!queue.empty()) {
-      const int v = queue.front();
-      queue.pop_front();
-      for (int u : neighbours[v]) if (ring[u] < 0) ring[u] = ring[v] + 1, queue.push_back(u);
-    }
+    detail::fill_rings(neighbours, &ring);
     // Linear fade over k rings as in pull_sheet; k doubles while a limit triangle folds.
     for (int k = std::max(1, options.cage_blend_rings);; k *= 2) {
       std::vector<Vec3> move(static_cast<size_t>(n_points), Vec3::Zero());
       for (int v = 0; v < n_points; ++v) {
         if (ring[v] == 0) move[v] = controls[v] - original.row(v).transpose();
       }
-      for (int r = 1; r <= k; ++r) {
-        const double factor = (1.0 - r / (k + 1.0)) / (1.0 - (r - 1) / (k + 1.0));
-        for (int v = 0; v < n_points; ++v) {
-          if (ring[v] != r) continue;
-          Vec3 sum = Vec3::Zero();
-          int count = 0;
-          for (int u : neighbours[v]) if (ring[u] == r - 1) sum += move[u], ++count;
-          move[v] = factor * sum / std::max(1, count);
-        }
-      }
+      detail::fade_over_rings(neighbours, ring, k, &move);
       out.cage.vertices = original;
       for (int v = 0; v < n_points; ++v) out.cage.vertices.row(v) += move[v].transpose();
       surface.set_control_points(out.cage.vertices);

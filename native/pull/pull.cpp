@@ -223,6 +223,36 @@ bool SheetPull::converged() const {
   return std::all_of(loops.begin(), loops.end(), [](const LoopPull& l) { return l.curve.converged; });
 }
 
+void detail::fill_rings(const std::vector<std::vector<int>>& adjacency, std::vector<int>* ring) {
+  std::deque<int> queue;
+  for (int v = 0; v < static_cast<int>(ring->size()); ++v) {
+    if ((*ring)[v] == 0) queue.push_back(v);
+  }
+  while (!queue.empty()) {
+    const int v = queue.front();
+    queue.pop_front();
+    for (int u : adjacency[v]) {
+      if ((*ring)[u] < 0) (*ring)[u] = (*ring)[v] + 1, queue.push_back(u);
+    }
+  }
+}
+
+void detail::fade_over_rings(const std::vector<std::vector<int>>& adjacency,
+                             const std::vector<int>& ring, int k, std::vector<Vec3>* move) {
+  for (int r = 1; r <= k; ++r) {
+    const double factor = (1.0 - r / (k + 1.0)) / (1.0 - (r - 1) / (k + 1.0));
+    for (int v = 0; v < static_cast<int>(ring.size()); ++v) {
+      if (ring[v] != r) continue;
+      Vec3 sum = Vec3::Zero();
+      int count = 0;
+      for (int u : adjacency[v]) {
+        if (ring[u] == r - 1) sum += (*move)[u], ++count;
+      }
+      (*move)[v] = factor * sum / std::max(1, count);
+    }
+  }
+}
+
 std::vector<std::vector<int>> detail::vertex_adjacency(const TriangleMesh& mesh) {
   std::vector<std::vector<int>> adjacency(static_cast<size_t>(mesh.vertices.rows()));
   for (Eigen::Index f = 0; f < mesh.triangles.rows(); ++f) {
@@ -303,33 +333,15 @@ SheetPull pull_sheet(const OrganicSheet& sheet, const SolidSet& solids, double e
   }
   // Ring distance from the boundary, for the blend.
   std::vector<int> ring(static_cast<size_t>(n), -1);
-  std::deque<int> queue;
   for (int v = 0; v < n; ++v) {
-    if (on_boundary[v]) ring[v] = 0, queue.push_back(v);
+    if (on_boundary[v]) ring[v] = 0;
   }
-  while (!queue.empty()) {
-    const int v = queue.front();
-    queue.pop_front();
-    for (int u : adjacency[v]) {
-      if (ring[u] < 0) ring[u] = ring[v] + 1, queue.push_back(u);
-    }
-  }
+  detail::fill_rings(adjacency, &ring);
   // Linear fade over k rings: ring r moves by (1 − r/(k+1)) of its boundary neighbours'
   // mean move, rescaled; k doubles while any triangle turns over.
   for (int k = std::max(1, options.blend_rings);; k *= 2) {
     std::vector<Vec3> move = displacement;
-    for (int r = 1; r <= k; ++r) {
-      const double factor = (1.0 - r / (k + 1.0)) / (1.0 - (r - 1) / (k + 1.0));
-      for (int v = 0; v < n; ++v) {
-        if (ring[v] != r) continue;
-        Vec3 sum = Vec3::Zero();
-        int count = 0;
-        for (int u : adjacency[v]) {
-          if (ring[u] == r - 1) sum += move[u], ++count;
-        }
-        move[v] = factor * sum / std::max(1, count);
-      }
-    }
+    detail::fade_over_rings(adjacency, ring, k, &move);
     Vertices moved = original;
     for (int v = 0; v < n; ++v) moved.row(v) += move[v].transpose();
     int folded = 0;
