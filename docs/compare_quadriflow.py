@@ -30,6 +30,9 @@ import bmesh
 import bpy
 import numpy as np
 from mathutils import Matrix, Vector
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from render_result import cycles_png, light  # noqa: E402  (render settings the docs share)
 from mathutils.bvhtree import BVHTree
 
 
@@ -359,16 +362,8 @@ def loop_tube(name, loops, radius, mat):
 
 def setup_scene(args):
     scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = args.samples
-    scene.cycles.use_denoising = False  # this Blender build has no OpenImageDenoise
-    scene.render.resolution_x, scene.render.resolution_y = args.width, args.height
-    scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "PNG"
+    cycles_png(scene, args.samples, args.width, args.height)
     scene.render.image_settings.color_mode = "RGB"
-    scene.render.image_settings.compression = 100
-    scene.view_settings.view_transform = "Standard"
     # The panel title is stamped into the image so a PNG says which method it shows.
     scene.render.use_stamp = True
     for flag in ("date", "time", "render_time", "frame", "frame_range", "memory", "hostname",
@@ -376,15 +371,7 @@ def setup_scene(args):
         setattr(scene.render, "use_stamp_" + flag, False)
     scene.render.use_stamp_note = True
     scene.render.stamp_font_size = 20
-    sun = link(bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN")))
-    sun.data.energy = 3.0
-    sun.rotation_euler = (math.radians(40), math.radians(10), math.radians(30))
-    world = scene.world or bpy.data.worlds.new("world")
-    scene.world = world
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
-    background.inputs["Color"].default_value = (0.8, 0.82, 0.85, 1.0)
-    background.inputs["Strength"].default_value = 0.7
+    light(scene)
     return scene
 
 

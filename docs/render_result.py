@@ -66,6 +66,19 @@ def light(scene):
     background.inputs["Strength"].default_value = 0.7
 
 
+def cycles_png(scene, samples, width, height):
+    """Cycles on the CPU, no denoiser, a PNG of width × height, colours as written."""
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False  # this Blender build has no OpenImageDenoise
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.compression = 100
+    scene.view_settings.view_transform = "Standard"  # keep the partition colours as written
+
+
 def main():
     args = parse_args()
     scene = bpy.context.scene
@@ -77,15 +90,7 @@ def main():
     for obj in scene.objects:
         if obj not in shown:
             obj.hide_render = True
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = args.samples
-    scene.cycles.use_denoising = False  # this Blender build has no OpenImageDenoise
-    scene.render.resolution_x, scene.render.resolution_y = args.width, args.height
-    scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.compression = 100
-    scene.view_settings.view_transform = "Standard"  # keep the partition colours as written
+    cycles_png(scene, args.samples, args.width, args.height)
     scene.render.filepath = bpy.path.abspath(args.out)
     frame(scene, shown, args.view)
     light(scene)
