@@ -158,12 +158,7 @@ class ComposeScenes : public ::testing::TestWithParam<int> {};
 TEST_P(ComposeScenes, ComposedSolidIsWatertightAndRespectsTheSolids) {
   const double h = 0.05;
   const int which = GetParam();
-  const Scene s = which == 0   ? grown_box_scene(h)
-                  : which == 1 ? tube_scene(h)
-                  : which == 2 ? two_arches_scene(h)
-                  : which == 3 ? eroded_seed_scene(h)
-                  : which == 4 ? bolt_hole_scene(h)
-                               : arch_row_scene(h, 3);
+  const Scene s = analytic_scene(which, h);
   const Converted r = convert_scene(s);
   expect_valid(r);
   // Contact curves match the loops one to one and lie on ∂S, the pulled boundary inside.

@@ -66,12 +66,7 @@ class PartitionScenes : public ::testing::TestWithParam<std::tuple<int, bool>> {
 TEST_P(PartitionScenes, ComponentsAndLoopsAreAsBuilt) {
   const auto [which, grid] = GetParam();
   const double h = 0.05;
-  const Scene s = which == 0   ? grown_box_scene(h)
-                  : which == 1 ? tube_scene(h)
-                  : which == 2 ? two_arches_scene(h)
-                  : which == 3 ? eroded_seed_scene(h)
-                  : which == 4 ? bolt_hole_scene(h)
-                               : arch_row_scene(h, 3);
+  const Scene s = analytic_scene(which, h);
   const Converted r = run(s, grid);
   EXPECT_EQ(r.partition.organic_components, s.expected_components) << s.name;
   EXPECT_EQ(static_cast<int>(r.partition.loops.size()), s.expected_loops) << s.name;

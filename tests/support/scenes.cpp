@@ -127,4 +127,13 @@ Scene bolt_hole_scene(double h) {
   return s;
 }
 
+Scene analytic_scene(int which, double h) {
+  return which == 0   ? grown_box_scene(h)
+         : which == 1 ? tube_scene(h)
+         : which == 2 ? two_arches_scene(h)
+         : which == 3 ? eroded_seed_scene(h)
+         : which == 4 ? bolt_hole_scene(h)
+                      : arch_row_scene(h, 3);
+}
+
 }  // namespace genbrep::testing

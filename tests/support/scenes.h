@@ -31,5 +31,8 @@ Scene eroded_seed_scene(double h);
 Scene bolt_hole_scene(double h);
 // A row of n arches joining n + 1 keep-in boxes at their feet (size scales with n).
 Scene arch_row_scene(double h, int n);
+// The analytic scenes by number, for parameterised tests: 0 grown_box, 1 tube,
+// 2 two_arches, 3 eroded_seed, 4 bolt_hole, 5 (or more) arch_row of 3.
+Scene analytic_scene(int which, double h);
 
 }  // namespace genbrep::testing
