@@ -52,6 +52,7 @@ void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
   out.loop_arcs.assign(n_curves, {});
   for (int c = 0; c < n_curves; ++c) {
     const Curve& curve = layout.curves[c];
+    if (curve.vertices.empty()) continue;  // removed
     std::vector<int> vs = curve.vertices;
     if (curve.closed) {
       auto it = std::find_if(vs.begin(), vs.end(), [&](int v) { return layout.node[v] != 0; });
@@ -133,6 +134,26 @@ std::vector<char> best_corners(const std::vector<Corner>& nodes, const std::vect
   return best;
 }
 
+// Takes the stretch `vertices` (consecutive along one open curve, either way round) off the
+// layout; false if it is no longer there (an earlier fix changed that curve).
+bool remove_stretch(const Surface& s, Layout& layout, std::vector<int> vertices) {
+  if (vertices.size() < 2) return false;
+  const auto h = s.mesh.find_halfedge(s.mesh.vertex_handle(vertices[0]),
+                                      s.mesh.vertex_handle(vertices[1]));
+  if (!h.is_valid()) return false;
+  const int c = layout.edge_curve[s.mesh.edge_handle(h).idx()];
+  if (c < 0 || layout.curves[c].closed) return false;
+  const std::vector<int>& cv = layout.curves[c].vertices;
+  for (int pass = 0; pass < 2; ++pass, std::reverse(vertices.begin(), vertices.end())) {
+    auto it = std::search(cv.begin(), cv.end(), vertices.begin(), vertices.end());
+    if (it == cv.end()) continue;
+    const int first = static_cast<int>(it - cv.begin());
+    remove_arc(s, layout, c, first, first + static_cast<int>(vertices.size()) - 1);
+    return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
@@ -167,6 +188,21 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       int override_halfedge = -1;
       std::vector<std::pair<int, int>> forced;  // last resort: (halfedge_out, quarters)
       std::vector<int> forced_nodes;
+      // When no cut can be traced: a stretch of an open curve to take off the layout
+      // (vertex list; a dangling separatrix, or the shortest arc of a sliver patch).
+      std::vector<int> remove_stretch;
+    };
+    // The shortest arc of an open curve on the patch boundary, to merge the patch with its
+    // neighbour when it cannot be cut.
+    auto shortest_open_arc = [&](const std::vector<Cycle>& cycles) {
+      int best = -1;
+      for (const Cycle& c : cycles)
+        for (int h : c.halfedges) {
+          const int a = out.halfedge_arc[h] / 2;
+          if (layout.curves[out.arcs[a].curve].closed) continue;
+          if (best < 0 || out.arcs[a].length < out.arcs[best].length) best = a;
+        }
+      return best < 0 ? std::vector<int>() : out.arcs[best].vertices;
     };
     // Last resort for a disk: its four sharpest boundary turns become the corners.
     auto force_corners = [&](const Cycle& c, Fix& fix) {
@@ -275,6 +311,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         Fix fix;
         fix.cuts.push_back({s.from(dangling->halfedge_out), dangling->halfedge_out,
                             dangling->halfedge_out, 0.5});
+        const int curve = layout.edge_curve[dangling->halfedge_out >> 1];
+        if (!layout.curves[curve].closed) fix.remove_stretch = layout.curves[curve].vertices;
         fixes.push_back(fix);
         continue;
       }
@@ -316,6 +354,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         if (!pick || std::abs(turning - 4) > 2) {
           fixes.push_back(middle_cuts(cycles));
           force_corners(cycle, fixes.back());
+          // A one-triangle sliver between curves can be neither cut nor forced: merge it.
+          if (fixes.back().forced.empty()) fixes.back().remove_stretch = shortest_open_arc(cycles);
           continue;
         }
         quarter_override[pick->halfedge_out] = turning > 4 ? 2 : 1;
@@ -330,6 +370,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         if (best.empty()) {
           fixes.push_back(middle_cuts(cycles));
           force_corners(cycle, fixes.back());
+          // A one-triangle sliver between curves can be neither cut nor forced: merge it.
+          if (fixes.back().forced.empty()) fixes.back().remove_stretch = shortest_open_arc(cycles);
           continue;
         }
         for (size_t i = 0; i < best.size(); ++i)
@@ -385,6 +427,10 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         ++out.recornered;
         done = true;
       }
+      if (!done && remove_stretch(s, layout, fix.remove_stretch)) {
+        ++out.removed_stretches;
+        done = true;
+      }
       if (!done && fix.override_halfedge >= 0) {
         quarter_override[fix.override_halfedge] = 2;
         ++out.recornered;
@@ -395,6 +441,10 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     GENBREP_CHECK(traced > 0, Code::StageFailure,
                   "quad: " + who + ": no extra cut could be traced into an invalid patch");
   }
+  if (out.removed_stretches)
+    diagnostics.push_back(who + ": " + std::to_string(out.removed_stretches) +
+                          " stretches of separatrices removed (dangling, or enclosing a patch "
+                          "too small to cut)");
   if (out.recornered)
     diagnostics.push_back(who + ": " + std::to_string(out.recornered) +
                           " patch corners re-read to make four-sided patches");

@@ -16,6 +16,59 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 }
 
+namespace quad_detail {
+
+DesignNormals::DesignNormals(const TriMesh& design) {
+  const int nv = static_cast<int>(design.n_vertices());
+  point_.resize(nv);
+  normal_.assign(nv, Vec3::Zero());
+  for (int v = 0; v < nv; ++v) {
+    const auto& p = design.point(design.vertex_handle(v));
+    point_[v] = Vec3(p[0], p[1], p[2]);
+  }
+  for (auto f : design.faces()) {
+    int c[3], k = 0;
+    for (auto v : design.fv_range(f)) c[k++] = v.idx();
+    const Vec3 n = (point_[c[1]] - point_[c[0]]).cross(point_[c[2]] - point_[c[0]]);
+    for (int v : c) normal_[v] += n;
+  }
+  lo_ = Vec3::Constant(1e300);
+  Vec3 hi = Vec3::Constant(-1e300);
+  for (const Vec3& p : point_) lo_ = lo_.cwiseMin(p), hi = hi.cwiseMax(p);
+  cell_ = nv ? std::max((hi - lo_).maxCoeff() / 64, 1e-12) : 1.0;
+  for (int v = 0; v < nv; ++v) buckets_[key(point_[v])].push_back(v);
+}
+
+std::array<long, 3> DesignNormals::key(const Vec3& p) const {
+  const Vec3 r = (p - lo_) / cell_;
+  return {long(std::floor(r.x())), long(std::floor(r.y())), long(std::floor(r.z()))};
+}
+
+Vec3 DesignNormals::nearest_normal(const Vec3& p) const {
+  const auto k = key(p);
+  int best = -1;
+  double best_d = 1e300;
+  for (int radius = 1; best < 0 && radius < 70 && !point_.empty(); radius *= 2)
+    for (long x = k[0] - radius; x <= k[0] + radius; ++x)
+      for (long y = k[1] - radius; y <= k[1] + radius; ++y)
+        for (long z = k[2] - radius; z <= k[2] + radius; ++z) {
+          auto it = buckets_.find({x, y, z});
+          if (it == buckets_.end()) continue;
+          for (int v : it->second) {
+            const double d = (point_[v] - p).squaredNorm();
+            if (d < best_d) best_d = d, best = v;
+          }
+        }
+  return best < 0 ? Vec3(Vec3::Zero()) : normal_[best];
+}
+
+bool DesignNormals::flipped(const Vec3 (&c)[4]) const {
+  const Vec3 n = nearest_normal(0.25 * (c[0] + c[1] + c[2] + c[3]));
+  return n.squaredNorm() > 0 && (c[2] - c[0]).cross(c[3] - c[1]).dot(n) <= 0;
+}
+
+}  // namespace quad_detail
+
 QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
   QuadStats stats;
   stats.quads = static_cast<int>(cage.quads.rows());
@@ -45,45 +98,7 @@ QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
   }
   stats.irregular_vertices = (stats.interior_vertices - stats.interior_valence4) +
                              (stats.boundary_vertices - stats.boundary_valence3);
-  // Design vertex normals (area-weighted) and a coarse hash grid for nearest vertices.
-  const int nv = static_cast<int>(design.n_vertices());
-  std::vector<Vec3> point(nv), normal(nv, Vec3::Zero());
-  for (int v = 0; v < nv; ++v) {
-    const auto& p = design.point(design.vertex_handle(v));
-    point[v] = Vec3(p[0], p[1], p[2]);
-  }
-  for (auto f : design.faces()) {
-    int c[3], k = 0;
-    for (auto v : design.fv_range(f)) c[k++] = v.idx();
-    const Vec3 n = (point[c[1]] - point[c[0]]).cross(point[c[2]] - point[c[0]]);
-    for (int v : c) normal[v] += n;
-  }
-  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
-  for (const Vec3& p : point) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const double cell = std::max((hi - lo).maxCoeff() / 64, 1e-12);
-  std::map<std::array<long, 3>, std::vector<int>> buckets;
-  auto key = [&](const Vec3& p) {
-    const Vec3 r = (p - lo) / cell;
-    return std::array<long, 3>{long(std::floor(r.x())), long(std::floor(r.y())), long(std::floor(r.z()))};
-  };
-  for (int v = 0; v < nv; ++v) buckets[key(point[v])].push_back(v);
-  auto nearest = [&](const Vec3& p) {
-    const auto k = key(p);
-    int best = -1;
-    double best_d = 1e300;
-    for (int radius = 1; best < 0 && radius < 70; radius *= 2)
-      for (long x = k[0] - radius; x <= k[0] + radius; ++x)
-        for (long y = k[1] - radius; y <= k[1] + radius; ++y)
-          for (long z = k[2] - radius; z <= k[2] + radius; ++z) {
-            auto it = buckets.find({x, y, z});
-            if (it == buckets.end()) continue;
-            for (int v : it->second) {
-              const double d = (point[v] - p).squaredNorm();
-              if (d < best_d) best_d = d, best = v;
-            }
-          }
-    return best;
-  };
+  const quad_detail::DesignNormals normals(design);
   double angle_sum = 0;
   int corners = 0;
   for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
@@ -104,9 +119,7 @@ QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
       ++corners;
     }
     stats.degenerate_quads += degenerate;
-    const Vec3 quad_normal = (c[2] - c[0]).cross(c[3] - c[1]);
-    const int v = nearest(0.25 * (c[0] + c[1] + c[2] + c[3]));
-    if (v >= 0 && quad_normal.dot(normal[v]) <= 0) ++stats.flipped_quads;
+    stats.flipped_quads += normals.flipped(c);
   }
   stats.mean_angle_deviation_deg = corners ? angle_sum / corners : 0;
   return stats;
@@ -149,12 +162,17 @@ QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& 
   QuadStats stats = measure_cage(*cage, design);
   if (!stats.flipped_quads && !stats.degenerate_quads) return stats;
   const int bad = stats.flipped_quads + stats.degenerate_quads;
-  const int moved = quad_detail::untangle_cage(surface, *cage, 24);
+  int collapsed = 0;
+  const int moved = quad_detail::untangle_cage(surface, *cage, 24, &collapsed);
   stats = measure_cage(*cage, design);
   diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
                          std::to_string(bad) + " degenerate or flipped quads after filling; " +
-                         std::to_string(moved) + " cage vertices around them smoothed, " +
-                         std::to_string(stats.flipped_quads + stats.degenerate_quads) + " left");
+                         std::to_string(moved) + " cage vertices around them smoothed" +
+                         (collapsed ? ", " + std::to_string(collapsed) +
+                                          " quads that stayed folded collapsed along a diagonal"
+                                    : std::string()) +
+                         ", " + std::to_string(stats.flipped_quads + stats.degenerate_quads) +
+                         " left");
   return stats;
 }
 

@@ -95,6 +95,36 @@ void register_curve(const Surface& s, Layout& layout, int c) {
   }
 }
 
+void remove_arc(const Surface& s, Layout& layout, int c, int first, int last) {
+  Curve& curve = layout.curves[c];
+  for (int i = first; i < last; ++i) {
+    const auto h = s.mesh.find_halfedge(s.mesh.vertex_handle(curve.vertices[i]),
+                                        s.mesh.vertex_handle(curve.vertices[i + 1]));
+    layout.edge_curve[s.mesh.edge_handle(h).idx()] = -1;
+    layout.halfedge_dir[h.idx()] = layout.halfedge_dir[h.idx() ^ 1] = Vec3::Zero();
+  }
+  for (int i = first; i <= last; ++i) {
+    const int v = curve.vertices[i];
+    bool held = std::find(layout.attractors.begin(), layout.attractors.end(), v) !=
+                layout.attractors.end();
+    for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(v)))
+      held |= layout.edge_curve[oh.idx() >> 1] >= 0;
+    if (!held) layout.claimed[v] = layout.node[v] = 0;
+  }
+  // The part after the arc becomes a curve of its own (if it has an edge).
+  if (last + 1 < static_cast<int>(curve.vertices.size())) {
+    Curve tail;
+    tail.vertices.assign(curve.vertices.begin() + last, curve.vertices.end());
+    tail.direction.assign(curve.direction.begin() + last, curve.direction.end());
+    layout.curves.push_back(tail);
+    register_curve(s, layout, static_cast<int>(layout.curves.size()) - 1);
+  }
+  Curve& head = layout.curves[c];  // push_back may have moved it
+  const int keep = first >= 1 ? first + 1 : 0;
+  head.vertices.resize(keep);
+  head.direction.resize(keep);
+}
+
 Layout start_layout(const Surface& s, const Diagnostics&) {
   Layout layout;
   const int nv = static_cast<int>(s.mesh.n_vertices());

@@ -2,6 +2,8 @@
 // field-guided tracing along mesh edges, the patch layout and its filling.
 #pragma once
 #include <Eigen/Dense>
+#include <array>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -72,6 +74,10 @@ struct Layout {
 Layout start_layout(const Surface& s, const Diagnostics& diagnostics);
 // Marks curve c on the edge/halfedge tables (after its vertices and directions are set).
 void register_curve(const Surface& s, Layout& layout, int c);
+// Takes the stretch vertices[first..last] of open curve c off the layout; what remains
+// before it stays curve c (empty if nothing), what remains after it becomes a new curve.
+// Vertices of the stretch are released unless another curve or a singularity holds them.
+void remove_arc(const Surface& s, Layout& layout, int c, int first, int last);
 // Traces from `vertex` into the sector from outgoing halfedge `first` counter-clockwise to
 // `last` (first == last: the whole fan), towards polar angle `fraction` of the sector,
 // snapped to the nearest field direction. Returns false (and traces nothing) when no edge
@@ -102,6 +108,7 @@ struct PatchLayout {
   std::vector<Patch> patches;
   std::vector<std::vector<int>> loop_arcs;  // per curve that is a loop: its arcs in order
   int recornered = 0;
+  int removed_stretches = 0;
 };
 
 // Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
@@ -128,10 +135,29 @@ class ComponentLocator {
   std::unique_ptr<Impl> impl_;
 };
 
+// The one test for a turned-over quad, shared by measure_cage and untangle_cage: the quad's
+// normal (cross product of its diagonals) against the area-weighted vertex normal of the
+// design vertex nearest its centroid (a hash grid over the design, locate in O(1) cells).
+class DesignNormals {
+ public:
+  explicit DesignNormals(const TriMesh& design);
+  Vec3 nearest_normal(const Vec3& p) const;  // zero if the design has no vertex
+  bool flipped(const Vec3 (&corner)[4]) const;
+
+ private:
+  std::vector<Vec3> point_, normal_;
+  Vec3 lo_;
+  double cell_ = 1;
+  std::map<std::array<long, 3>, std::vector<int>> buckets_;
+  std::array<long, 3> key(const Vec3& p) const;
+};
+
 // Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
 // within a few rings of them are smoothed and projected back onto the component, for at
 // most `max_rounds` rounds (untangle.cpp). Returns how many vertices moved.
-int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds);
+// Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
+// and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
+int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collapsed);
 
 // Last resort: a pure-quad cage that is not field-aligned (fallback.cpp), from a coarse
 // remesh at `coarse_edge_length` split once (cage edges about half that long).
