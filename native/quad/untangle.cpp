@@ -99,10 +99,8 @@ std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
   return moved_ever;
 }
 
-// Collapses the shorter diagonal of each quad in `bad` whose diagonal ends are interior
-// cage vertices that share no other quad (the link condition: the cage stays a pure-quad
-// 2-manifold). The merged vertex goes to the diagonal's midpoint, projected onto the
-// component. Returns how many quads were collapsed.
+}  // namespace
+
 int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad) {
   const int nv = static_cast<int>(cage.vertices.rows());
@@ -167,8 +165,6 @@ int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCa
   cage.quads = std::move(quads);
   return collapsed;
 }
-
-}  // namespace
 
 int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collapsed) {
   const ComponentLocator locator(s);

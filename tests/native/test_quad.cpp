@@ -16,6 +16,7 @@
 #include "level_set.h"
 #include "mesh/mesh.h"
 #include "partition/partition.h"
+#include "quad/detail/layout.h"
 #include "quad/quad.h"
 #include "relax/relax.h"
 #include "partitioned.h"
@@ -188,6 +189,94 @@ TEST(Quad, TubeIsAnAnnulusWithTwoChains) {
   EXPECT_EQ(problems, 0);
   EXPECT_EQ(result.cages[0].boundary_chains.size(), 2u);
   expect_targets("tube", result.stats[0]);
+}
+
+// The repairs of a filled cage (untangle.cpp) on the tube's cage: a quad turned over by
+// hand is opened up again, and collapsing a quad's diagonal leaves a valid pure-quad cage
+// with the merged vertex on the design.
+TEST(Quad, UntangleOpensAFoldAndADiagonalCollapseKeepsTheCageValid) {
+  const Partitioned r = relaxed(partition_scene(tube_scene(0.05)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  const QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
+  ASSERT_EQ(result.cages.size(), 1u);
+  const QuadCage& original = result.cages[0];
+  ASSERT_EQ(check_cage(original, r), 0);
+  // An interior quad two rings away from every chain.
+  const int nv = static_cast<int>(original.vertices.rows());
+  std::vector<int> ring(nv, 1 << 20);
+  std::vector<int> frontier;
+  for (const auto& chain : original.boundary_chains)
+    for (int v : chain) ring[v] = 0, frontier.push_back(v);
+  std::vector<std::set<int>> neighbours(nv);
+  for (Eigen::Index q = 0; q < original.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k)
+      neighbours[original.quads(q, k)].insert(original.quads(q, (k + 1) % 4)),
+          neighbours[original.quads(q, (k + 1) % 4)].insert(original.quads(q, k));
+  for (size_t i = 0; i < frontier.size(); ++i)
+    for (int w : neighbours[frontier[i]])
+      if (ring[w] > ring[frontier[i]] + 1) ring[w] = ring[frontier[i]] + 1, frontier.push_back(w);
+  int pick = -1;
+  for (Eigen::Index q = 0; q < original.quads.rows() && pick < 0; ++q) {
+    bool deep = true;
+    for (int k = 0; k < 4; ++k) deep &= ring[original.quads(q, k)] >= 3;
+    if (deep) pick = static_cast<int>(q);
+  }
+  ASSERT_GE(pick, 0);
+  const quad_detail::Surface surface(r.mesh, r.partition, field, 0);
+
+  // Fold: corner 0 is pushed through the quad's centre to beyond corner 2.
+  QuadCage folded = original;
+  Vec3 centre = Vec3::Zero();
+  for (int k = 0; k < 4; ++k) centre += 0.25 * folded.vertices.row(folded.quads(pick, k)).transpose();
+  const int moved = folded.quads(pick, 0);
+  const Vec3 p0 = folded.vertices.row(moved).transpose();
+  folded.vertices.row(moved) = (centre + 1.6 * (centre - p0)).transpose();
+  EXPECT_GT(measure_cage(folded, r.mesh).flipped_quads, 0);
+  int collapsed = -1;
+  quad_detail::untangle_cage(surface, folded, 24, &collapsed);
+  const QuadStats repaired = measure_cage(folded, r.mesh);
+  EXPECT_EQ(repaired.flipped_quads, 0);
+  EXPECT_EQ(repaired.degenerate_quads, 0);
+  EXPECT_EQ(check_cage(folded, r), 0);
+
+  // Diagonal collapse of the same quad.
+  QuadCage cage = original;
+  const quad_detail::ComponentLocator locator(surface);
+  ASSERT_EQ(quad_detail::collapse_diagonals(surface, locator, cage, {pick}), 1);
+  EXPECT_EQ(cage.quads.rows(), original.quads.rows() - 1);
+  EXPECT_EQ(cage.vertices.rows(), original.vertices.rows() - 1);
+  EXPECT_EQ(check_cage(cage, r), 0);
+  // The one vertex that moved lies on the design (closest point over all triangles).
+  int merged = -1;
+  for (Eigen::Index v = 0; v < cage.vertices.rows(); ++v) {
+    bool old = false;
+    for (Eigen::Index w = 0; w < original.vertices.rows() && !old; ++w)
+      old = (cage.vertices.row(v) - original.vertices.row(w)).norm() < 1e-12;
+    if (!old) {
+      EXPECT_EQ(merged, -1);
+      merged = static_cast<int>(v);
+    }
+  }
+  ASSERT_GE(merged, 0);
+  const Vec3 m = cage.vertices.row(merged).transpose();
+  double nearest = 1e300;
+  for (auto f : r.mesh.faces()) {
+    Vec3 c[3];
+    int k = 0;
+    for (auto v : r.mesh.fv_range(f)) {
+      const auto& p = r.mesh.point(v);
+      c[k++] = Vec3(p[0], p[1], p[2]);
+    }
+    // Closest point on the triangle by projection, clamped to the edges when outside.
+    const Vec3 n = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+    const Vec3 q = m - n * n.dot(m - c[0]);
+    bool inside = true;
+    for (int e = 0; e < 3; ++e) inside &= (c[(e + 1) % 3] - c[e]).cross(q - c[e]).dot(n) >= 0;
+    double d = inside ? (m - q).norm() : 1e300;
+    for (int e = 0; e < 3; ++e) d = std::min(d, point_segment_distance(m, c[e], c[(e + 1) % 3]));
+    nearest = std::min(nearest, d);
+  }
+  EXPECT_LT(nearest, 1e-9);
 }
 
 TEST(Quad, TwoArchesGiveTwoValidCages) {

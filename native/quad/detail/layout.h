@@ -155,6 +155,13 @@ class DesignNormals {
 // Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
 // within a few rings of them are smoothed and projected back onto the component, for at
 // most `max_rounds` rounds (untangle.cpp). Returns how many vertices moved.
+// Collapses the shorter diagonal of each quad in `bad` whose diagonal ends are interior
+// cage vertices that share no other quad and whose other corners keep ≥ 3 quads (the
+// cage stays a pure-quad 2-manifold); quads sharing a corner with an earlier collapse are
+// skipped. The merged vertex goes to the diagonal's midpoint, projected onto the
+// component; vertices are renumbered (chains and creases follow). Returns the count.
+int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
+                       const std::vector<int>& bad);
 // Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
 // and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
 int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collapsed);
