@@ -204,7 +204,18 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     detail::OrganicCell cell;
     ComponentContact contact;
     if (surface.cage) {
-      contact = detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, &cell);
+      try {
+        contact = detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, &cell);
+      } catch (const Error& e) {
+        // A cage edited into something the pull cannot use (e.g. not 2-manifold) is
+        // reported like a pull that does not converge; the design region stands in.
+        if (e.code() == Code::Cancelled) throw;
+        contact = ComponentContact();
+        contact.component = surface.sheet.component;
+        contact.diagnostics.push_back("organic component " + std::to_string(surface.sheet.component) +
+                                      ": its cage cannot be pulled: " + e.what());
+        cell = detail::OrganicCell();
+      }
       if (!contact.established && has_sheet) {
         Diagnostics why = contact.diagnostics;
         contact = detail::establish(surface.sheet, solids, options, &cell);

@@ -156,6 +156,16 @@ bool remove_stretch(const Surface& s, Layout& layout, std::vector<int> vertices)
 
 }  // namespace
 
+bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch) {
+  int best = -1;
+  for (const auto& side : patches.patches[patch].sides)
+    for (auto& [a, reversed] : side) {
+      if (layout.curves[patches.arcs[a].curve].closed) continue;
+      if (best < 0 || patches.arcs[a].length < patches.arcs[best].length) best = a;
+    }
+  return best >= 0 && remove_stretch(s, layout, patches.arcs[best].vertices);
+}
+
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
                           Diagnostics& diagnostics) {
   const std::string who = "component " + std::to_string(s.component);

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <set>
+#include <tuple>
 
 #include "quad/detail/layout.h"
 
@@ -165,6 +167,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& 
   int collapsed = 0;
   const int moved = quad_detail::untangle_cage(surface, *cage, 24, &collapsed);
   stats = measure_cage(*cage, design);
+  stats.collapsed_quads = collapsed;
   diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
                          std::to_string(bad) + " degenerate or flipped quads after filling; " +
                          std::to_string(moved) + " cage vertices around them smoothed" +
@@ -176,26 +179,124 @@ QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& 
   return stats;
 }
 
+// Whether the cage is an oriented 2-manifold whose limit surface can be built: every
+// directed edge once, the quads around every vertex one fan (joined through the edges at
+// that vertex), and no two quads sharing three corners or a diagonal. Collapsed sliver
+// patches and diagonal collapses can break this; `why` names the first problem.
+bool cage_is_manifold(const QuadCage& cage, std::string* why) {
+  const int nv = static_cast<int>(cage.vertices.rows());
+  std::map<std::pair<int, int>, int> directed;  // → quad
+  std::vector<std::vector<int>> quads_of(nv);
+  for (int q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      if (a == b || !directed.insert({{a, b}, q}).second) {
+        *why = "edge " + std::to_string(a) + "-" + std::to_string(b) + " is used twice the same way";
+        return false;
+      }
+      quads_of[a].push_back(q);
+    }
+  for (int v = 0; v < nv; ++v) {
+    const auto& around = quads_of[v];
+    if (around.empty()) continue;
+    // Walk the fan from one quad across the edges at v; it must reach every quad at v.
+    std::set<int> reached{around[0]};
+    std::vector<int> stack{around[0]};
+    while (!stack.empty()) {
+      const int q = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 4; ++k) {
+        if (cage.quads(q, k) != v) continue;
+        for (int w : {cage.quads(q, (k + 1) % 4), cage.quads(q, (k + 3) % 4)})
+          for (auto key : {std::make_pair(v, w), std::make_pair(w, v)}) {
+            auto it = directed.find(key);
+            if (it != directed.end() && reached.insert(it->second).second) stack.push_back(it->second);
+          }
+      }
+    }
+    if (reached.size() != around.size()) {
+      *why = "cage vertex " + std::to_string(v) + " joins two fans of quads";
+      return false;
+    }
+  }
+  // Two quads sharing three corners (a doublet: an interior vertex with two quads) or a
+  // diagonal: the limit surface folds there.
+  for (int q = 0; q < cage.quads.rows(); ++q) {
+    std::map<int, int> shared;
+    for (int k = 0; k < 4; ++k)
+      for (int r : quads_of[cage.quads(q, k)])
+        if (r != q) ++shared[r];
+    for (const auto& [r, n] : shared) {
+      bool diagonal = false;
+      if (n == 2)
+        for (int k = 0; k < 2; ++k)
+          for (int j = 0; j < 2; ++j)
+            diagonal |= (cage.quads(q, k) == cage.quads(r, j) && cage.quads(q, k + 2) == cage.quads(r, j + 2)) ||
+                        (cage.quads(q, k) == cage.quads(r, j + 2) && cage.quads(q, k + 2) == cage.quads(r, j));
+      if (n >= 3 || diagonal) {
+        *why = "quads " + std::to_string(q) + " and " + std::to_string(r) + " share " +
+               (n >= 3 ? "three corners" : "a diagonal");
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid.
 void extract_once(const quad_detail::Surface& surface, const TriMesh& design,
-                  const QuadOptions& options, QuadCage* cage, QuadStats* stats,
-                  Diagnostics* diagnostics) {
+                  const QuadOptions& options, std::set<std::size_t>* seen_layouts,
+                  QuadCage* cage, QuadStats* stats, Diagnostics* diagnostics) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
   quad_detail::trace_separatrices(surface, layout, options, *diagnostics);
-  quad_detail::PatchLayout patches =
-      quad_detail::build_patches(surface, layout, options, *diagnostics);
+  // A layout whose sides cannot balance (a strip that would need a loop arc at 0 edges)
+  // has its unbalanced patches merged with a neighbour, a few rounds at most.
+  quad_detail::PatchLayout patches;
   std::string failure;
   bool relaxed = false;
-  GENBREP_CHECK(quad_detail::quantize(patches, options, &failure, &relaxed), Code::StageFailure,
-                "quad: component " + std::to_string(c) + ": quantization of " +
-                    std::to_string(patches.patches.size()) + " patches: " + failure);
+  int merged = 0;
+  Diagnostics layout_diagnostics;  // of the last round only
+  for (int round = 0;; ++round) {
+    layout_diagnostics.clear();
+    patches = quad_detail::build_patches(surface, layout, options, layout_diagnostics);
+    if (quad_detail::quantize(patches, options, &failure, &relaxed)) break;
+    int now = 0;
+    if (round < options.max_balance_rounds)
+      for (int p : quad_detail::unbalanced_patches(patches))
+        now += quad_detail::merge_patch(surface, layout, patches, p);
+    GENBREP_CHECK(now > 0, Code::StageFailure,
+                  "quad: component " + std::to_string(c) + ": quantization of " +
+                      std::to_string(patches.patches.size()) + " patches: " + failure +
+                      (merged ? " (after merging " + std::to_string(merged) +
+                                    " unbalanced patches)"
+                              : std::string()));
+    merged += now;
+  }
+  // Different choices often give the same quantized layout: it is filled only once.
+  std::size_t fingerprint = patches.arcs.size();
+  for (const auto& arc : patches.arcs)
+    for (int value : {arc.vertices.front(), arc.vertices.back(), arc.count})
+      fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(value);
+  for (const auto& patch : patches.patches)
+    for (const auto& side : patch.sides)
+      for (const auto& [a, reversed] : side)
+        fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
+  GENBREP_CHECK(seen_layouts->insert(fingerprint).second, Code::StageFailure,
+                "quad: component " + std::to_string(c) + ": the same layout as an earlier choice");
+  diagnostics->insert(diagnostics->end(), layout_diagnostics.begin(), layout_diagnostics.end());
+  if (merged)
+    diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
+                           " patches whose sides could not balance merged with a neighbour");
   if (relaxed)
     diagnostics->push_back("component " + std::to_string(c) +
                            ": the layout's sides balance only with some interior arcs at 0 edges");
   *cage = quad_detail::fill_patches(surface, layout, patches, *diagnostics);
+  if (const int doublets = quad_detail::remove_doublets(*cage))
+    diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
+                           " doublets (interior vertices of two quads) removed");
   *stats = measure_untangled(surface, design, cage, diagnostics);
   stats->patches = static_cast<int>(patches.patches.size());
   stats->separatrices = layout.separatrices;
@@ -203,6 +304,9 @@ void extract_once(const quad_detail::Surface& surface, const TriMesh& design,
   if (layout.dropped_traces)
     diagnostics->push_back("component " + std::to_string(c) + ": " +
                            std::to_string(layout.dropped_traces) + " traces dropped");
+  std::string why;
+  GENBREP_CHECK(cage_is_manifold(*cage, &why), Code::StageFailure,
+                "quad: component " + std::to_string(c) + ": the cage is not a valid 2-manifold: " + why);
   GENBREP_CHECK(stats->flipped_quads == 0 && stats->degenerate_quads == 0, Code::StageFailure,
                 "the cage has " + std::to_string(stats->flipped_quads) + " flipped and " +
                     std::to_string(stats->degenerate_quads) + " degenerate quads");
@@ -215,11 +319,21 @@ bool meets_targets(const QuadStats& s) {
          s.mean_angle_deviation_deg <= 12.0;
 }
 
+// Meets them with a margin (valence 4 ≥ 98%, valence 3 ≥ 95%, ≤ 8°): no other layout
+// choice is tried.
+bool comfortably_meets_targets(const QuadStats& s) {
+  return s.interior_valence4_fraction() >= 0.98 && s.boundary_valence3_fraction() >= 0.95 &&
+         s.mean_angle_deviation_deg <= 8.0;
+}
+
 // One component. The layout depends on a few discrete choices (how corners are read,
 // which singularity pairs cancel, which singularities the boundary absorbs, whether
-// separatrices cross). They are tried in turn, each from scratch, until a cage meets the
-// targets; otherwise the valid cage with the smallest mean corner deviation is kept. The
-// choice that was used is reported when it is not the requested one.
+// separatrices cross, whether unbalanced patches are merged). They are tried in turn, each
+// from scratch (a layout equal to an earlier one is not filled again), until a cage meets
+// the targets with a margin. Kept: among the cages meeting the targets, the one with the
+// fewest irregular vertices, then the smallest mean corner deviation; if none meets them,
+// the valid cage with the smallest mean corner deviation. The choice that was used is
+// reported when it is not the requested one.
 void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
                        const QuadOptions& options, int c, QuadResult* out) {
   struct Variant { std::string what; QuadOptions options; };
@@ -237,19 +351,28 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
          o.pair_cancel_distance *= 2, o.boundary_absorb_distance *= 2;
          o.cross_separatrices = !o.cross_separatrices;
        }}};
-  for (const auto& [what, change] : layouts)
-    for (bool flip_corners : {false, true}) {
-      QuadOptions o = options;
-      change(o);
-      if (flip_corners) o.fit_corners = !o.fit_corners;
-      std::string name = what;
-      if (flip_corners) {
-        name += name.empty() ? "" : ", ";
-        name += o.fit_corners ? "corners fitted as rectangles" : "corners re-read one at a time";
+  // Merging unbalanced patches is tried only after every choice without it.
+  for (bool balance : {false, true})
+    for (const auto& [what, change] : layouts)
+      for (bool flip_corners : {false, true}) {
+        QuadOptions o = options;
+        change(o);
+        if (flip_corners) o.fit_corners = !o.fit_corners;
+        std::string name = what;
+        if (flip_corners) {
+          name += name.empty() ? "" : ", ";
+          name += o.fit_corners ? "corners fitted as rectangles" : "corners re-read one at a time";
+        }
+        if (balance) {
+          name += name.empty() ? "" : ", ";
+          name += "unbalanced patches merged";
+        } else {
+          o.max_balance_rounds = 0;
+        }
+        variants.push_back({name, o});
       }
-      variants.push_back({name, o});
-    }
   const quad_detail::Surface surface(design, partition, field, c);
+  std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
   int best = -1;
   QuadCage best_cage;
@@ -260,20 +383,33 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     QuadStats stats;
     Diagnostics diagnostics;
     try {
-      extract_once(surface, design, variants[k].options, &cage, &stats, &diagnostics);
+      extract_once(surface, design, variants[k].options, &seen_layouts, &cage, &stats,
+                   &diagnostics);
     } catch (const Error& e) {
       if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
       if (first_failure.empty()) first_failure = e.what();
       if (k == 0) requested_failure = e.what();
       continue;
     }
-    if (best < 0 || stats.mean_angle_deviation_deg < best_stats.mean_angle_deviation_deg) {
+    // Collapsed quads mean the layout itself was broken there: such a cage is kept only
+    // if it meets the targets (else the fallback is the better cage).
+    if (stats.collapsed_quads && !meets_targets(stats)) {
+      if (first_failure.empty()) first_failure = "the cage needed folded quads collapsed and misses the targets";
+      if (k == 0) requested_failure = "the cage needed folded quads collapsed and misses the targets";
+      continue;
+    }
+    const auto rank = [](const QuadStats& s) {
+      const bool meets = meets_targets(s);
+      return std::make_tuple(meets ? 0 : 1, meets ? s.irregular_vertices : 0,
+                             s.mean_angle_deviation_deg);
+    };
+    if (best < 0 || rank(stats) < rank(best_stats)) {
       best = static_cast<int>(k);
       best_cage = std::move(cage);
       best_stats = stats;
       best_diagnostics = std::move(diagnostics);
     }
-    if (meets_targets(best_stats)) break;
+    if (comfortably_meets_targets(best_stats)) break;
   }
   if (best >= 0) {
     out->diagnostics.insert(out->diagnostics.end(), best_diagnostics.begin(), best_diagnostics.end());

@@ -12,12 +12,18 @@
 //      singularities closer than `pair_cancel_distance` are not traced (they cancel).
 //      Patches that are not topological disks with four corners get extra field-aligned
 //      cuts from their boundary; corners are read from the angles between the curves.
+//      Sliver patches that cannot be cut (one triangle between curves) and dangling
+//      separatrices are merged away by taking a stretch of separatrix off the layout.
 //   2. quantization: every layout arc gets an integer count ≥ 1 near length / size; the
 //      two pairs of opposite sides of every patch get equal sums (an exact integer
-//      program, GLPK); interior arcs may get 0 where the sides balance only so.
-//   4. untangling: quads the filling squeezed or turned over are opened up by local
-//      smoothing on the surface. A component whose cage stays invalid is retried with a
-//      few neighbouring layout choices (reported) before it is given up.
+//      program, GLPK); interior arcs may get 0 where the sides balance only so. If even
+//      that has no solution, the patches an imbalance LP names are merged with a
+//      neighbour and the layout is rebuilt (a few rounds).
+//   4. repair: doublets left by collapsed sliver patches are removed; quads the filling
+//      squeezed or turned over are opened up by local smoothing on the surface, and a
+//      quad that stays folded has a diagonal collapsed. The cage must then be a 2-manifold
+//      with no doublet. Several layout choices are tried (reported); the fallback cage
+//      (a split coarse remesh) is the last resort.
 //   3. filling: every patch is mapped to its integer rectangle (Tutte map with the sides
 //      sampled by arc length) and the grid's points are lifted back to the surface.
 // Gives: one QuadCage per organic component, in component order, with vertices on the
@@ -60,6 +66,8 @@ struct QuadOptions {
   bool fit_corners = true;
   // Rounds of extra cuts for patches that are not disks with four corners.
   int max_fix_rounds = 64;
+  // Rounds of merging patches whose sides cannot balance, before quantization gives up.
+  int max_balance_rounds = 8;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
   double density = 1.0;
 };
@@ -80,6 +88,7 @@ struct QuadStats {
   int patches = 0;
   int separatrices = 0;
   bool fallback = false;  // no field-aligned layout worked: the split coarse remesh (not aligned)
+  int collapsed_quads = 0;  // quads that stayed folded after smoothing, collapsed (untangle)
   double seconds = 0;
   double interior_valence4_fraction() const {
     return interior_vertices ? double(interior_valence4) / interior_vertices : 1.0;

@@ -113,6 +113,53 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
 
 }  // namespace
 
+std::vector<int> unbalanced_patches(const PatchLayout& layout) {
+  const int arcs = static_cast<int>(layout.arcs.size());
+  std::vector<int> sides_of(arcs, 0);
+  for (const Patch& patch : layout.patches)
+    for (const auto& side : patch.sides)
+      for (auto& [a, reversed] : side) ++sides_of[a];
+  glp_term_out(GLP_OFF);
+  std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
+  glp_prob* lp = problem.get();
+  glp_set_obj_dir(lp, GLP_MIN);
+  glp_add_cols(lp, arcs);
+  for (int a = 0; a < arcs; ++a) glp_set_col_bnds(lp, a + 1, GLP_LO, sides_of[a] == 1 ? 1 : 0, 0);
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0};
+  std::vector<int> row_patch;
+  for (size_t p = 0; p < layout.patches.size(); ++p)
+    for (int pair = 0; pair < 2; ++pair) {
+      std::map<int, int> row;
+      for (int side : {pair, pair + 2})
+        for (auto& [a, reversed] : layout.patches[p].sides[side]) row[a] += side < 2 ? 1 : -1;
+      const int r = glp_add_rows(lp, 1);
+      glp_set_row_bnds(lp, r, GLP_FX, 0, 0);
+      for (auto& [a, c] : row)
+        if (c) ia.push_back(r), ja.push_back(a + 1), ar.push_back(c);
+      const int slack = glp_add_cols(lp, 2);  // s⁺ − s⁻, both priced 1
+      for (int k = 0; k < 2; ++k) {
+        glp_set_col_bnds(lp, slack + k, GLP_LO, 0, 0);
+        glp_set_obj_coef(lp, slack + k, 1);
+        ia.push_back(r), ja.push_back(slack + k), ar.push_back(k ? -1.0 : 1.0);
+      }
+      row_patch.push_back(static_cast<int>(p));
+    }
+  glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
+  glp_smcp parameters;
+  glp_init_smcp(&parameters);
+  parameters.msg_lev = GLP_MSG_OFF;
+  std::vector<int> out;
+  if (glp_simplex(lp, &parameters) != 0 || glp_get_status(lp) != GLP_OPT) return out;
+  for (size_t r = 0; r < row_patch.size(); ++r) {
+    const int slack = arcs + 2 * static_cast<int>(r) + 1;
+    if (glp_get_col_prim(lp, slack) + glp_get_col_prim(lp, slack + 1) > 1e-9 &&
+        (out.empty() || out.back() != row_patch[r]))
+      out.push_back(row_patch[r]);
+  }
+  return out;
+}
+
 // Interior arcs shorter than one target edge (sliver arcs between nearby T-junctions and
 // nodes) may get 0 edges: their end nodes then merge in the cage (zero-length arcs as in
 // Campen et al. 2015, QGP), and a patch whose two opposite sides both get 0 collapses onto

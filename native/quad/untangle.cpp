@@ -56,17 +56,25 @@ std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
   // region grows while the repair does not succeed). A vertex moves within its tangent
   // plane and is projected back; a move whose projection lands on a face facing another
   // way (the far side of a thin wall) is refused. The best cage seen is kept.
+  // Only quads around moved vertices are tested again after a round; a repair that has not
+  // improved for 8 rounds stops.
+  std::vector<std::vector<int>> quads_of(nv);
+  for (int q = 0; q < nq; ++q)
+    for (int k = 0; k < 4; ++k) quads_of[cage.quads(q, k)].push_back(q);
+  std::vector<char> is_bad(nq, 0);
+  for (int q = 0; q < nq; ++q) is_bad[q] = bad(q);
   auto bad_quads = [&] {
     std::vector<int> list;
     for (int q = 0; q < nq; ++q)
-      if (bad(q)) list.push_back(q);
+      if (is_bad[q]) list.push_back(q);
     return list;
   };
   std::vector<int> current = bad_quads();
   Eigen::MatrixX3d best = cage.vertices;
+  std::vector<char> best_is_bad = is_bad;
   size_t best_bad = current.size();
   std::set<int> moved_ever;
-  for (int round = 0; round < max_rounds && !current.empty(); ++round) {
+  for (int round = 0, stale = 0; round < max_rounds && !current.empty() && stale < 8; ++round) {
     std::set<int> region;
     for (int q : current)
       for (int k = 0; k < 4; ++k) region.insert(cage.quads(q, k));
@@ -75,6 +83,7 @@ std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
       for (int v : region) grown.insert(neighbours[v].begin(), neighbours[v].end());
       region.swap(grown);
     }
+    std::set<int> moved_now;
     for (int sweep = 0; sweep < 4; ++sweep)
       for (int v : region) {
         if (fixed[v] || neighbours[v].empty()) continue;
@@ -89,17 +98,95 @@ std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
         const Vec3 landed = project(at + step, &landed_normal);
         if (landed_normal.dot(normal) < 0.5) continue;
         cage.vertices.row(v) = landed.transpose();
-        moved_ever.insert(v);
+        moved_now.insert(v);
       }
+    for (int v : moved_now)
+      for (int q : quads_of[v]) is_bad[q] = bad(q);
+    moved_ever.insert(moved_now.begin(), moved_now.end());
     current = bad_quads();
-    if (current.size() < best_bad) best_bad = current.size(), best = cage.vertices;
+    ++stale;
+    if (current.size() < best_bad)
+      best_bad = current.size(), best = cage.vertices, best_is_bad = is_bad, stale = 0;
   }
   cage.vertices = best;
+  is_bad = best_is_bad;
   *still_bad = bad_quads();
   return moved_ever;
 }
 
+// Drops the quads flagged in `removed` and every vertex v with merged_into[v] ≥ 0 (its
+// corners move to merged_into[v]) or, with merged_into[v] == -2, no quad left; renumbers
+// the vertices, chains and creases.
+void compact(QuadCage& cage, const std::vector<char>& removed, const std::vector<int>& merged_into) {
+  const int nv = static_cast<int>(cage.vertices.rows());
+  std::vector<int> new_id(nv, -1);
+  int kept = 0;
+  for (int v = 0; v < nv; ++v)
+    if (merged_into[v] == -1) new_id[v] = kept++;
+  auto id = [&](int v) { return new_id[merged_into[v] >= 0 ? merged_into[v] : v]; };
+  Vertices vertices(kept, 3);
+  for (int v = 0; v < nv; ++v)
+    if (new_id[v] >= 0) vertices.row(new_id[v]) = cage.vertices.row(v);
+  const int quad_count =
+      static_cast<int>(std::count(removed.begin(), removed.end(), char(0)));
+  Quads quads(quad_count, 4);
+  for (int q = 0, r = 0; q < cage.quads.rows(); ++q) {
+    if (removed[q]) continue;
+    for (int k = 0; k < 4; ++k) quads(r, k) = id(cage.quads(q, k));
+    ++r;
+  }
+  for (auto& chain : cage.boundary_chains)
+    for (int& v : chain) v = id(v);
+  for (auto& e : cage.crease_edges) e = {id(e[0]), id(e[1])};
+  cage.vertices = std::move(vertices);
+  cage.quads = std::move(quads);
+}
+
 }  // namespace
+
+int remove_doublets(QuadCage& cage) {
+  int removed_total = 0;
+  for (int pass = 0; pass < 8; ++pass) {
+    const int nv = static_cast<int>(cage.vertices.rows());
+    std::vector<char> fixed(nv, 0), touched(nv, 0);
+    for (const auto& chain : cage.boundary_chains)
+      for (int v : chain) fixed[v] = 1;
+    std::vector<std::vector<int>> quads_of(nv);
+    for (int q = 0; q < cage.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) quads_of[cage.quads(q, k)].push_back(q);
+    std::vector<int> merged_into(nv, -1);
+    std::vector<char> removed(cage.quads.rows(), 0);
+    int now = 0;
+    // The corners of quad q from the one at v, counter-clockwise.
+    auto from = [&](int q, int v, int (&c)[4]) {
+      int k = 0;
+      while (k < 4 && cage.quads(q, k) != v) ++k;
+      for (int j = 0; j < 4; ++j) c[j] = cage.quads(q, (k + j) % 4);
+    };
+    for (int v = 0; v < nv; ++v) {
+      if (fixed[v] || quads_of[v].size() != 2) continue;
+      const int q1 = quads_of[v][0], q2 = quads_of[v][1];
+      int a[4], b[4];
+      from(q1, v, a);  // v, b, x, a
+      from(q2, v, b);  // v, a, y, b
+      if (b[1] != a[3] || b[3] != a[1] || a[2] == b[2]) continue;
+      bool busy = false;
+      for (int k = 0; k < 4; ++k) busy |= touched[a[k]] || touched[b[k]];
+      if (busy) continue;
+      for (int k = 0; k < 4; ++k) touched[a[k]] = touched[b[k]] = 1;
+      // The two quads become one: b, x, a, y.
+      cage.quads(q1, 0) = a[1], cage.quads(q1, 1) = a[2], cage.quads(q1, 2) = a[3],
+      cage.quads(q1, 3) = b[2];
+      removed[q2] = 1;
+      merged_into[v] = -2;
+      ++now;
+    }
+    if (!now) break;
+    compact(cage, removed, merged_into);
+    removed_total += now;
+  }
+  return removed_total;
+}
 
 int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad) {
@@ -118,7 +205,7 @@ int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCa
     double best_length = 1e300;
     for (int k = 0; k < 2; ++k) {
       const int a = cage.quads(q, k), c = cage.quads(q, k + 2);
-      if (fixed[a] || fixed[c] || touched[a] || touched[c]) continue;
+      if ((fixed[a] && fixed[c]) || touched[a] || touched[c]) continue;
       bool shared = false;  // another quad holding both ends
       for (int r : quads_of[a])
         if (r != q)
@@ -129,40 +216,33 @@ int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCa
       if (quads_of[b].size() < (fixed[b] ? 3u : 4u) || quads_of[d].size() < (fixed[d] ? 3u : 4u))
         continue;
       if (shared) continue;
+      // Into a chain vertex only if the interior end touches no other chain vertex (the
+      // merged vertex would join two boundary fans).
+      if (fixed[a] || fixed[c]) {
+        const int inner = fixed[a] ? c : a, outer = fixed[a] ? a : c;
+        bool touches = false;
+        for (int r : quads_of[inner])
+          for (int j = 0; j < 4; ++j)
+            touches |= fixed[cage.quads(r, j)] && cage.quads(r, j) != outer;
+        if (touches) continue;
+      }
       const double length = (cage.vertices.row(a) - cage.vertices.row(c)).norm();
       if (length < best_length) best_length = length, best_k = k;
     }
     if (best_k < 0) continue;
-    const int a = cage.quads(q, best_k), c = cage.quads(q, best_k + 2);
+    int a = cage.quads(q, best_k), c = cage.quads(q, best_k + 2);
     for (int k = 0; k < 4; ++k) touched[cage.quads(q, k)] = 1;
-    Vec3 normal;
-    const Vec3 mid = 0.5 * (cage.vertices.row(a) + cage.vertices.row(c)).transpose();
-    cage.vertices.row(a) = locator.closest(mid, &normal).transpose();
+    if (fixed[c]) std::swap(a, c);
+    if (!fixed[a]) {  // both interior: the midpoint, on the component
+      Vec3 normal;
+      const Vec3 mid = 0.5 * (cage.vertices.row(a) + cage.vertices.row(c)).transpose();
+      cage.vertices.row(a) = locator.closest(mid, &normal).transpose();
+    }  // else the interior end merges into the chain vertex, which stays on its loop
     merged_into[c] = a;
     removed[q] = 1;
     ++collapsed;
   }
-  if (!collapsed) return 0;
-  // Compact: drop the removed quads and merged vertices, renumber.
-  std::vector<int> new_id(nv, -1);
-  int kept = 0;
-  for (int v = 0; v < nv; ++v)
-    if (merged_into[v] < 0) new_id[v] = kept++;
-  auto id = [&](int v) { return new_id[merged_into[v] >= 0 ? merged_into[v] : v]; };
-  Vertices vertices(kept, 3);
-  for (int v = 0; v < nv; ++v)
-    if (new_id[v] >= 0) vertices.row(new_id[v]) = cage.vertices.row(v);
-  Quads quads(cage.quads.rows() - collapsed, 4);
-  for (int q = 0, r = 0; q < cage.quads.rows(); ++q) {
-    if (removed[q]) continue;
-    for (int k = 0; k < 4; ++k) quads(r, k) = id(cage.quads(q, k));
-    ++r;
-  }
-  for (auto& chain : cage.boundary_chains)
-    for (int& v : chain) v = id(v);
-  for (auto& e : cage.crease_edges) e = {id(e[0]), id(e[1])};
-  cage.vertices = std::move(vertices);
-  cage.quads = std::move(quads);
+  if (collapsed) compact(cage, removed, merged_into);
   return collapsed;
 }
 
@@ -175,7 +255,7 @@ int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collaps
   // A fold that smoothing cannot open (a grid cell turned over inside a regular region):
   // take the quad out by collapsing a diagonal, then smooth again.
   *collapsed = 0;
-  for (int attempt = 0; attempt < 4 && !bad.empty(); ++attempt) {
+  for (int attempt = 0; attempt < 8 && !bad.empty(); ++attempt) {
     const int now = collapse_diagonals(s, locator, cage, bad);
     if (!now) break;
     *collapsed += now;

@@ -697,3 +697,40 @@ TEST(Recompose, OpenOrNonQuadCagesAreNamed) {
     EXPECT_EQ(std::string(e.what()).rfind("cage 'component 0' is open: its boundary loop", 0), 0u) << e.what();
   }
 }
+
+// A cage compose cannot pull (here one quad given twice: not 2-manifold) does not fail
+// the composition: that component is composed from its design region, and the report
+// says why.
+TEST(Compose, UnusableCageFallsBackToTheDesignRegion) {
+  const Scene s = tube_scene(0.05);
+  const Result result = convert(scene_inputs(s), Options{}, Context());
+  ASSERT_EQ(result.fitted.size(), 1u);
+  std::vector<OrganicSurface> surfaces;
+  for (auto& sheet : organic_sheets(result.relaxed.design, result.relaxed.partition))
+    surfaces.push_back({std::move(sheet), std::nullopt, {}});
+  QuadCage broken = result.fitted[0].cage;
+  Quads quads(broken.quads.rows() + 1, 4);
+  quads.topRows(broken.quads.rows()) = broken.quads;
+  quads.row(broken.quads.rows()) = broken.quads.row(broken.quads.rows() / 2);
+  broken.quads = quads;
+  OrganicSurface& surface = surfaces.at(static_cast<size_t>(broken.component));
+  surface.cage = broken;
+  for (int loop : broken.chain_loop)
+    surface.chain_solids.push_back(result.relaxed.partition.loops[loop].solids);
+  const SolidSet solids(result.solids, nullptr);
+  const Composed composed = compose(surfaces, solids, ComposeOptions{}, Context());
+  ASSERT_EQ(composed.contacts.size(), 1u);
+  EXPECT_TRUE(composed.contacts[0].established) << joined(composed.contacts[0].diagnostics);
+  EXPECT_EQ(composed.contacts[0].surface, "design region");
+  EXPECT_TRUE(composed.report.ok) << joined(composed.report.diagnostics);
+  bool named = false;
+  for (const auto& d : composed.report.diagnostics)
+    named = named || d.find("its cage could not be pulled") != std::string::npos;
+  EXPECT_TRUE(named) << joined(composed.report.diagnostics);
+  Converted r;
+  r.name = "tube/broken cage";
+  r.design = result.design;
+  r.solids = result.solids;
+  r.composed = composed;
+  expect_valid(r);
+}

@@ -279,6 +279,61 @@ TEST(Quad, UntangleOpensAFoldAndADiagonalCollapseKeepsTheCageValid) {
   EXPECT_LT(nearest, 1e-9);
 }
 
+// A doublet (an interior vertex with two quads sharing two edges), made by splitting one
+// quad of the tube's cage through a new centre vertex, is removed again.
+TEST(Quad, DoubletIsRemoved) {
+  const Partitioned r = relaxed(partition_scene(tube_scene(0.05)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  const QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
+  ASSERT_EQ(result.cages.size(), 1u);
+  const QuadCage& original = result.cages[0];
+  QuadCage cage = original;
+  EXPECT_EQ(quad_detail::remove_doublets(cage), 0);
+  const int q = static_cast<int>(cage.quads.rows() / 2);
+  const int a = cage.quads(q, 0), b = cage.quads(q, 1), c = cage.quads(q, 2), d = cage.quads(q, 3);
+  const int v = static_cast<int>(cage.vertices.rows());
+  Vertices vertices(v + 1, 3);
+  vertices.topRows(v) = cage.vertices;
+  vertices.row(v) = 0.25 * (cage.vertices.row(a) + cage.vertices.row(b) + cage.vertices.row(c) +
+                            cage.vertices.row(d));
+  Quads quads(cage.quads.rows() + 1, 4);
+  quads.topRows(cage.quads.rows()) = cage.quads;
+  quads.row(q) << a, b, c, v;
+  quads.row(cage.quads.rows()) << c, d, a, v;
+  cage.vertices = vertices;
+  cage.quads = quads;
+  EXPECT_EQ(check_cage(cage, r), 0);  // still a manifold, just with a doublet
+  EXPECT_EQ(quad_detail::remove_doublets(cage), 1);
+  EXPECT_EQ(cage.quads.rows(), original.quads.rows());
+  EXPECT_EQ(cage.vertices.rows(), original.vertices.rows());
+  EXPECT_EQ(check_cage(cage, r), 0);
+  const QuadStats stats = measure_cage(cage, r.mesh);
+  EXPECT_EQ(stats.irregular_vertices, 0);
+  EXPECT_EQ(stats.flipped_quads, 0);
+}
+
+// A patch whose side equalities force a loop arc to 0 (side 0 = loop arc + x, side 2 = x)
+// cannot be quantized; the imbalance LP names exactly that patch.
+TEST(Quad, UnbalancedPatchIsNamed) {
+  quad_detail::PatchLayout layout;
+  layout.arcs.resize(5);
+  for (auto& arc : layout.arcs) arc.target = 2, arc.length = 2;
+  // Patch 0: a balanced rectangle of arcs 3 | 4 | 3 | 4 (interior, shared with patch 1).
+  // Patch 1: sides {0 (loop), 1} | 2 | {1} | 2, and arcs 3, 4 on nothing else.
+  quad_detail::Patch balanced, unbalanced;
+  balanced.sides = {{{3, false}}, {{4, false}}, {{3, true}}, {{4, true}}};
+  unbalanced.sides = {{{0, false}, {1, false}}, {{2, false}}, {{1, true}}, {{2, true}}};
+  layout.patches = {balanced, unbalanced};
+  std::string failure;
+  bool relaxed = false;
+  EXPECT_FALSE(quad_detail::quantize(layout, QuadOptions{}, &failure, &relaxed));
+  EXPECT_EQ(quad_detail::unbalanced_patches(layout), std::vector<int>{1});
+  // Without the loop arc's lower bound (arc 0 also on patch 0) it balances.
+  layout.patches[0].sides[0].push_back({0, true});
+  layout.patches[0].sides[2].push_back({0, false});
+  EXPECT_TRUE(quad_detail::unbalanced_patches(layout).empty());
+}
+
 TEST(Quad, TwoArchesGiveTwoValidCages) {
   const Partitioned r = relaxed(partition_scene(two_arches_scene(0.05)));
   int problems = 0;

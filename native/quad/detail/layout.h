@@ -122,6 +122,13 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
               bool* relaxed);
 
+// The patches whose side equalities cannot all hold even with every interior arc free to be
+// 0 (loop arcs ≥ 1): those that need slack in the LP that minimises the total imbalance.
+std::vector<int> unbalanced_patches(const PatchLayout& patches);
+// Merges `patch` with a neighbour by taking the shortest separatrix arc on its boundary off
+// the layout (build_patches is then run again); false if it has none left to remove.
+bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch);
+
 // Closest points on the component's triangles (locate.cpp), with the normal of the face hit.
 class ComponentLocator {
  public:
@@ -155,13 +162,18 @@ class DesignNormals {
 // Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
 // within a few rings of them are smoothed and projected back onto the component, for at
 // most `max_rounds` rounds (untangle.cpp). Returns how many vertices moved.
-// Collapses the shorter diagonal of each quad in `bad` whose diagonal ends are interior
-// cage vertices that share no other quad and whose other corners keep ≥ 3 quads (the
-// cage stays a pure-quad 2-manifold); quads sharing a corner with an earlier collapse are
-// skipped. The merged vertex goes to the diagonal's midpoint, projected onto the
-// component; vertices are renumbered (chains and creases follow). Returns the count.
+// Collapses the shorter diagonal of each quad in `bad` whose diagonal ends share no other
+// quad, are not both on chains, and whose other corners keep ≥ 3 quads (the cage stays a
+// pure-quad 2-manifold); quads sharing a corner with an earlier collapse are skipped.
+// The merged vertex goes to the diagonal's midpoint, projected onto the component, or
+// stays at the end that lies on a chain; vertices are renumbered (chains and creases
+// follow). Returns the count.
 int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad);
+// Removes doublets: an interior cage vertex with only two quads, which share two edges,
+// goes and the two quads become one. Returns how many (collapsed sliver patches leave
+// them; the limit surface folds at a doublet).
+int remove_doublets(QuadCage& cage);
 // Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
 // and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
 int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collapsed);
