@@ -158,24 +158,36 @@ QuadResult extract_cages(const TriMesh& design, const Partition& partition,
 namespace {
 
 // Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
-// reported.
+// reported. A valid cage is then evened out (relax_cage: 10 sweeps, half steps), kept if
+// it stays valid and its corners come closer to 90°.
 QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& design,
                             QuadCage* cage, Diagnostics* diagnostics) {
   QuadStats stats = measure_cage(*cage, design);
-  if (!stats.flipped_quads && !stats.degenerate_quads) return stats;
-  const int bad = stats.flipped_quads + stats.degenerate_quads;
-  int collapsed = 0;
-  const int moved = quad_detail::untangle_cage(surface, *cage, 24, &collapsed);
-  stats = measure_cage(*cage, design);
-  stats.collapsed_quads = collapsed;
-  diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
-                         std::to_string(bad) + " degenerate or flipped quads after filling; " +
-                         std::to_string(moved) + " cage vertices around them smoothed" +
-                         (collapsed ? ", " + std::to_string(collapsed) +
-                                          " quads that stayed folded collapsed along a diagonal"
-                                    : std::string()) +
-                         ", " + std::to_string(stats.flipped_quads + stats.degenerate_quads) +
-                         " left");
+  if (stats.flipped_quads || stats.degenerate_quads) {
+    const int bad = stats.flipped_quads + stats.degenerate_quads;
+    int collapsed = 0;
+    const int moved = quad_detail::untangle_cage(surface, *cage, 24, &collapsed);
+    stats = measure_cage(*cage, design);
+    stats.collapsed_quads = collapsed;
+    diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
+                           std::to_string(bad) + " degenerate or flipped quads after filling; " +
+                           std::to_string(moved) + " cage vertices around them smoothed" +
+                           (collapsed ? ", " + std::to_string(collapsed) +
+                                            " quads that stayed folded collapsed along a diagonal"
+                                      : std::string()) +
+                           ", " + std::to_string(stats.flipped_quads + stats.degenerate_quads) +
+                           " left");
+  }
+  if (stats.flipped_quads || stats.degenerate_quads) return stats;
+  QuadCage relaxed = *cage;
+  quad_detail::relax_cage(surface, relaxed, 10, 0.5);
+  QuadStats relaxed_stats = measure_cage(relaxed, design);
+  if (!relaxed_stats.flipped_quads && !relaxed_stats.degenerate_quads &&
+      relaxed_stats.mean_angle_deviation_deg < stats.mean_angle_deviation_deg) {
+    relaxed_stats.collapsed_quads = stats.collapsed_quads;
+    *cage = std::move(relaxed);
+    stats = relaxed_stats;
+  }
   return stats;
 }
 

@@ -21,6 +21,23 @@ constexpr double kMinCornerDegrees = 5.0;
 // After a diagonal collapse the neighbourhood is smoothed until its corners reach this.
 constexpr double kShapeCornerDegrees = 30.0;
 
+// A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
+// or against the component face under its centroid.
+bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
+                 const QuadCage& cage, int q, double min_corner_degrees) {
+  Vec3 c[4];
+  for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
+    if (a.norm() == 0 || b.norm() == 0) return true;
+    if (std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi < min_corner_degrees) return true;
+  }
+  if (normals.flipped(c)) return true;
+  Vec3 normal;
+  locator.closest(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal);
+  return (c[2] - c[0]).cross(c[3] - c[1]).dot(normal) <= 0;
+}
+
 // The smoothing repair; returns the vertices it moved and leaves the best cage it saw.
 std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
                           const DesignNormals& normals, QuadCage& cage, int max_rounds,
@@ -38,20 +55,7 @@ std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
   for (const auto& chain : cage.boundary_chains)
     for (int v : chain) fixed[v] = 1;
   auto point = [&](int v) { return Vec3(cage.vertices.row(v).transpose()); };
-  auto bad = [&](int q) {
-    Vec3 c[4];
-    for (int k = 0; k < 4; ++k) c[k] = point(cage.quads(q, k));
-    for (int k = 0; k < 4; ++k) {
-      const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
-      if (a.norm() == 0 || b.norm() == 0) return true;
-      if (std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi < min_corner_degrees) return true;
-    }
-    // Turned over by measure_cage's test, or against the component face under the centroid.
-    if (normals.flipped(c)) return true;
-    Vec3 normal;
-    project(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal);
-    return (c[2] - c[0]).cross(c[3] - c[1]).dot(normal) <= 0;
-  };
+  auto bad = [&](int q) { return quad_is_bad(locator, normals, cage, q, min_corner_degrees); };
   // Each round smooths the free vertices within 1 + round / 4 rings of a bad quad (the
   // region grows while the repair does not succeed). A vertex moves within its tangent
   // plane and is projected back; a move whose projection lands on a face facing another
@@ -186,6 +190,47 @@ int remove_doublets(QuadCage& cage) {
     removed_total += now;
   }
   return removed_total;
+}
+
+int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step) {
+  const ComponentLocator locator(s);
+  const DesignNormals normals(s.mesh);
+  const int nv = static_cast<int>(cage.vertices.rows());
+  std::vector<std::set<int>> neighbours(nv);
+  std::vector<std::vector<int>> quads_of(nv);
+  for (int q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      neighbours[a].insert(b), neighbours[b].insert(a);
+      quads_of[a].push_back(q);
+    }
+  std::vector<char> fixed(nv, 0);
+  for (const auto& chain : cage.boundary_chains)
+    for (int v : chain) fixed[v] = 1;
+  int moved = 0;
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    moved = 0;
+    for (int v = 0; v < nv; ++v) {
+      if (fixed[v] || neighbours[v].empty()) continue;
+      const Vec3 old = cage.vertices.row(v).transpose();
+      Vec3 normal;
+      const Vec3 at = locator.closest(old, &normal);
+      Vec3 mean = Vec3::Zero();
+      for (int w : neighbours[v]) mean += cage.vertices.row(w).transpose();
+      mean /= static_cast<double>(neighbours[v].size());
+      Vec3 d = step * (mean - at);
+      d -= d.dot(normal) * normal;
+      Vec3 landed_normal;
+      const Vec3 landed = locator.closest(at + d, &landed_normal);
+      if (landed_normal.dot(normal) < 0.5) continue;
+      cage.vertices.row(v) = landed.transpose();
+      bool ok = true;
+      for (int q : quads_of[v]) ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
+      if (!ok) cage.vertices.row(v) = old.transpose();
+      else ++moved;
+    }
+  }
+  return moved;
 }
 
 int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,

@@ -350,6 +350,7 @@ TEST(Quad, GrownBoxIsADisk) {
   ASSERT_EQ(result.cages.size(), 1u);
   EXPECT_EQ(problems, 0);
   EXPECT_EQ(result.cages[0].boundary_chains.size(), 1u);
+  expect_targets("grown_box", result.stats[0]);
 }
 
 TEST(Quad, ClosedSphereHasEightValenceThreeVertices) {

@@ -170,6 +170,11 @@ class DesignNormals {
 // follow). Returns the count.
 int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad);
+// Evens out a valid cage: for `sweeps` sweeps every free vertex moves `step` of the way to
+// the mean of its neighbours, in its tangent plane and back onto the component; a move
+// that would make one of its quads squeezed or turned over is undone. Returns the vertices
+// moved in the last sweep.
+int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step);
 // Removes doublets: an interior cage vertex with only two quads, which share two edges,
 // goes and the two quads become one. Returns how many (collapsed sliver patches leave
 // them; the limit surface folds at a doublet).
