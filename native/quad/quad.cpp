@@ -445,17 +445,20 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   QuadCage cage;
   QuadStats stats;
   double scale = 0;
+  bool valid = false;
   Diagnostics untangled;  // of the rejected tries too: only the last one's is kept
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
     cage = quad_detail::fallback_cage(surface, factor * size);
     untangled.clear();
     stats = measure_untangled(surface, design, &cage, &untangled);
     scale = factor;
-    if (!stats.flipped_quads && !stats.degenerate_quads) break;
+    std::string why;
+    valid = !stats.flipped_quads && !stats.degenerate_quads && cage_is_manifold(cage, &why);
+    if (valid) break;
   }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.fallback = true;
-  GENBREP_CHECK(stats.flipped_quads == 0 && stats.degenerate_quads == 0, Code::StageFailure,
+  GENBREP_CHECK(valid, Code::StageFailure,
                 first_failure + " (and " + std::to_string(variants.size() - 1) +
                     " alternative layouts and the fallback cage failed too)");
   char scale_text[16];
