@@ -21,6 +21,26 @@ constexpr double kMinCornerDegrees = 5.0;
 // After a diagonal collapse the neighbourhood is smoothed until its corners reach this.
 constexpr double kShapeCornerDegrees = 30.0;
 
+// Per cage vertex: whether it lies on a boundary chain (never moved or merged away), the
+// quads around it and its edge neighbours.
+struct CageIncidence {
+  explicit CageIncidence(const QuadCage& cage)
+      : on_chain(cage.vertices.rows(), 0), quads_of(cage.vertices.rows()),
+        neighbours(cage.vertices.rows()) {
+    for (const auto& chain : cage.boundary_chains)
+      for (int v : chain) on_chain[v] = 1;
+    for (int q = 0; q < cage.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) {
+        const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+        quads_of[a].push_back(q);
+        neighbours[a].insert(b), neighbours[b].insert(a);
+      }
+  }
+  std::vector<char> on_chain;
+  std::vector<std::vector<int>> quads_of;
+  std::vector<std::set<int>> neighbours;
+};
+
 // A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
 // or against the component face under its centroid.
 bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
@@ -39,21 +59,15 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
 }
 
 // The smoothing repair; returns the vertices it moved and leaves the best cage it saw.
-std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
+std::set<int> smooth_cage(const ComponentLocator& locator,
                           const DesignNormals& normals, QuadCage& cage, int max_rounds,
                           double min_corner_degrees, std::vector<int>* still_bad) {
   auto project = [&](const Vec3& p, Vec3* normal) { return locator.closest(p, normal); };
-  const int nv = static_cast<int>(cage.vertices.rows());
   const int nq = static_cast<int>(cage.quads.rows());
-  std::vector<std::set<int>> neighbours(nv);
-  for (int q = 0; q < nq; ++q)
-    for (int k = 0; k < 4; ++k) {
-      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
-      neighbours[a].insert(b), neighbours[b].insert(a);
-    }
-  std::vector<char> fixed(nv, 0);
-  for (const auto& chain : cage.boundary_chains)
-    for (int v : chain) fixed[v] = 1;
+  const CageIncidence incidence(cage);
+  const auto& neighbours = incidence.neighbours;
+  const auto& fixed = incidence.on_chain;
+  const auto& quads_of = incidence.quads_of;
   auto point = [&](int v) { return Vec3(cage.vertices.row(v).transpose()); };
   auto bad = [&](int q) { return quad_is_bad(locator, normals, cage, q, min_corner_degrees); };
   // Each round smooths the free vertices within 1 + round / 4 rings of a bad quad (the
@@ -62,9 +76,6 @@ std::set<int> smooth_cage(const Surface& s, const ComponentLocator& locator,
   // way (the far side of a thin wall) is refused. The best cage seen is kept.
   // Only quads around moved vertices are tested again after a round; a repair that has not
   // improved for 8 rounds stops.
-  std::vector<std::vector<int>> quads_of(nv);
-  for (int q = 0; q < nq; ++q)
-    for (int k = 0; k < 4; ++k) quads_of[cage.quads(q, k)].push_back(q);
   std::vector<char> is_bad(nq, 0);
   for (int q = 0; q < nq; ++q) is_bad[q] = bad(q);
   auto bad_quads = [&] {
@@ -152,12 +163,10 @@ int remove_doublets(QuadCage& cage) {
   int removed_total = 0;
   for (int pass = 0; pass < 8; ++pass) {
     const int nv = static_cast<int>(cage.vertices.rows());
-    std::vector<char> fixed(nv, 0), touched(nv, 0);
-    for (const auto& chain : cage.boundary_chains)
-      for (int v : chain) fixed[v] = 1;
-    std::vector<std::vector<int>> quads_of(nv);
-    for (int q = 0; q < cage.quads.rows(); ++q)
-      for (int k = 0; k < 4; ++k) quads_of[cage.quads(q, k)].push_back(q);
+    const CageIncidence incidence(cage);
+    const auto& fixed = incidence.on_chain;
+    const auto& quads_of = incidence.quads_of;
+    std::vector<char> touched(nv, 0);
     std::vector<int> merged_into(nv, -1);
     std::vector<char> removed(cage.quads.rows(), 0);
     int now = 0;
@@ -196,17 +205,10 @@ int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step) {
   const ComponentLocator locator(s);
   const DesignNormals normals(s.mesh);
   const int nv = static_cast<int>(cage.vertices.rows());
-  std::vector<std::set<int>> neighbours(nv);
-  std::vector<std::vector<int>> quads_of(nv);
-  for (int q = 0; q < cage.quads.rows(); ++q)
-    for (int k = 0; k < 4; ++k) {
-      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
-      neighbours[a].insert(b), neighbours[b].insert(a);
-      quads_of[a].push_back(q);
-    }
-  std::vector<char> fixed(nv, 0);
-  for (const auto& chain : cage.boundary_chains)
-    for (int v : chain) fixed[v] = 1;
+  const CageIncidence incidence(cage);
+  const auto& neighbours = incidence.neighbours;
+  const auto& fixed = incidence.on_chain;
+  const auto& quads_of = incidence.quads_of;
   int moved = 0;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     moved = 0;
@@ -233,15 +235,13 @@ int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step) {
   return moved;
 }
 
-int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
+int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad) {
   const int nv = static_cast<int>(cage.vertices.rows());
-  std::vector<char> fixed(nv, 0), touched(nv, 0);
-  for (const auto& chain : cage.boundary_chains)
-    for (int v : chain) fixed[v] = 1;
-  std::vector<std::vector<int>> quads_of(nv);
-  for (int q = 0; q < cage.quads.rows(); ++q)
-    for (int k = 0; k < 4; ++k) quads_of[cage.quads(q, k)].push_back(q);
+  const CageIncidence incidence(cage);
+  const auto& fixed = incidence.on_chain;
+  const auto& quads_of = incidence.quads_of;
+  std::vector<char> touched(nv, 0);
   std::vector<int> merged_into(nv, -1);
   std::vector<char> removed(cage.quads.rows(), 0);
   int collapsed = 0;
@@ -296,16 +296,16 @@ int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collaps
   const DesignNormals normals(s.mesh);
   std::vector<int> bad;
   int moved = static_cast<int>(
-      smooth_cage(s, locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());
+      smooth_cage(locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());
   // A fold that smoothing cannot open (a grid cell turned over inside a regular region):
   // take the quad out by collapsing a diagonal, then smooth again.
   *collapsed = 0;
   for (int attempt = 0; attempt < 8 && !bad.empty(); ++attempt) {
-    const int now = collapse_diagonals(s, locator, cage, bad);
+    const int now = collapse_diagonals(locator, cage, bad);
     if (!now) break;
     *collapsed += now;
     moved += static_cast<int>(
-        smooth_cage(s, locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());
+        smooth_cage(locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());
   }
   if (*collapsed && bad.empty()) {
     // A collapse leaves thin quads around the merged vertex: open them further while the
@@ -313,9 +313,9 @@ int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collaps
     const Vertices valid = cage.vertices;
     std::vector<int> thin;
     moved += static_cast<int>(
-        smooth_cage(s, locator, normals, cage, max_rounds, kShapeCornerDegrees, &thin).size());
+        smooth_cage(locator, normals, cage, max_rounds, kShapeCornerDegrees, &thin).size());
     std::vector<int> strict;
-    smooth_cage(s, locator, normals, cage, 0, kMinCornerDegrees, &strict);
+    smooth_cage(locator, normals, cage, 0, kMinCornerDegrees, &strict);
     if (!strict.empty()) cage.vertices = valid;
   }
   return moved;

@@ -242,7 +242,7 @@ TEST(Quad, UntangleOpensAFoldAndADiagonalCollapseKeepsTheCageValid) {
   // Diagonal collapse of the same quad.
   QuadCage cage = original;
   const quad_detail::ComponentLocator locator(surface);
-  ASSERT_EQ(quad_detail::collapse_diagonals(surface, locator, cage, {pick}), 1);
+  ASSERT_EQ(quad_detail::collapse_diagonals(locator, cage, {pick}), 1);
   EXPECT_EQ(cage.quads.rows(), original.quads.rows() - 1);
   EXPECT_EQ(cage.vertices.rows(), original.vertices.rows() - 1);
   EXPECT_EQ(check_cage(cage, r), 0);

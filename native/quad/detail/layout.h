@@ -168,7 +168,7 @@ class DesignNormals {
 // The merged vertex goes to the diagonal's midpoint, projected onto the component, or
 // stays at the end that lies on a chain; vertices are renumbered (chains and creases
 // follow). Returns the count.
-int collapse_diagonals(const Surface& s, const ComponentLocator& locator, QuadCage& cage,
+int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad);
 // Evens out a valid cage: for `sweeps` sweeps every free vertex moves `step` of the way to
 // the mean of its neighbours, in its tangent plane and back onto the component; a move
