@@ -342,10 +342,11 @@ bool comfortably_meets_targets(const QuadStats& s) {
 // which singularity pairs cancel, which singularities the boundary absorbs, whether
 // separatrices cross, whether unbalanced patches are merged). They are tried in turn, each
 // from scratch (a layout equal to an earlier one is not filled again), until a cage meets
-// the targets with a margin. Kept: among the cages meeting the targets, the one with the
-// fewest irregular vertices, then the smallest mean corner deviation; if none meets them,
-// the valid cage with the smallest mean corner deviation. The choice that was used is
-// reported when it is not the requested one.
+// the targets with a margin. Kept: among the cages meeting the targets, preferably one
+// that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit
+// surface can fold), then the fewest irregular vertices, then the smallest mean corner
+// deviation; if none meets them, the valid cage with the smallest mean corner deviation.
+// The choice that was used is reported when it is not the requested one.
 void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
                        const QuadOptions& options, int c, QuadResult* out) {
   struct Variant { std::string what; QuadOptions options; };
@@ -412,8 +413,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     }
     const auto rank = [](const QuadStats& s) {
       const bool meets = meets_targets(s);
-      return std::make_tuple(meets ? 0 : 1, meets ? s.irregular_vertices : 0,
-                             s.mean_angle_deviation_deg);
+      return std::make_tuple(meets ? 0 : 1, s.collapsed_quads > 0 ? 1 : 0,
+                             meets ? s.irregular_vertices : 0, s.mean_angle_deviation_deg);
     };
     if (best < 0 || rank(stats) < rank(best_stats)) {
       best = static_cast<int>(k);
@@ -421,7 +422,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       best_stats = stats;
       best_diagnostics = std::move(diagnostics);
     }
-    if (comfortably_meets_targets(best_stats)) break;
+    if (comfortably_meets_targets(best_stats) && !best_stats.collapsed_quads) break;
   }
   if (best >= 0) {
     out->diagnostics.insert(out->diagnostics.end(), best_diagnostics.begin(), best_diagnostics.end());
