@@ -100,8 +100,8 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   const int status = glp_mip_status(lp);
   if ((code != 0 && code != GLP_ETMLIM) || (status != GLP_OPT && status != GLP_FEAS)) {
     *failure = code == GLP_ENOPFS || status == GLP_NOFEAS
-                   ? "no integer counts make opposite sides equal (" +
-                         std::to_string(rows.size()) + " side constraints)"
+                   ? "no integer counts make opposite sides equal (" + std::to_string(rows.size()) +
+                         " side constraints)"
                    : "the integer program stopped without a solution (GLPK code " +
                          std::to_string(code) + ")";
     return false;

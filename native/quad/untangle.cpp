@@ -25,7 +25,8 @@ constexpr double kShapeCornerDegrees = 30.0;
 // quads around it and its edge neighbours.
 struct CageIncidence {
   explicit CageIncidence(const QuadCage& cage)
-      : on_chain(cage.vertices.rows(), 0), quads_of(cage.vertices.rows()),
+      : on_chain(cage.vertices.rows(), 0),
+        quads_of(cage.vertices.rows()),
         neighbours(cage.vertices.rows()) {
     for (const auto& chain : cage.boundary_chains)
       for (int v : chain) on_chain[v] = 1;
@@ -59,9 +60,9 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
 }
 
 // The smoothing repair; returns the vertices it moved and leaves the best cage it saw.
-std::set<int> smooth_cage(const ComponentLocator& locator,
-                          const DesignNormals& normals, QuadCage& cage, int max_rounds,
-                          double min_corner_degrees, std::vector<int>* still_bad) {
+std::set<int> smooth_cage(const ComponentLocator& locator, const DesignNormals& normals,
+                          QuadCage& cage, int max_rounds, double min_corner_degrees,
+                          std::vector<int>* still_bad) {
   auto project = [&](const Vec3& p, Vec3* normal) { return locator.closest(p, normal); };
   const int nq = static_cast<int>(cage.quads.rows());
   const CageIncidence incidence(cage);
@@ -132,7 +133,8 @@ std::set<int> smooth_cage(const ComponentLocator& locator,
 // Drops the quads flagged in `removed` and every vertex v with merged_into[v] ≥ 0 (its
 // corners move to merged_into[v]) or, with merged_into[v] == -2, no quad left; renumbers
 // the vertices, chains and creases.
-void compact(QuadCage& cage, const std::vector<char>& removed, const std::vector<int>& merged_into) {
+void compact(QuadCage& cage, const std::vector<char>& removed,
+             const std::vector<int>& merged_into) {
   const int nv = static_cast<int>(cage.vertices.rows());
   std::vector<int> new_id(nv, -1);
   int kept = 0;
@@ -142,8 +144,7 @@ void compact(QuadCage& cage, const std::vector<char>& removed, const std::vector
   Vertices vertices(kept, 3);
   for (int v = 0; v < nv; ++v)
     if (new_id[v] >= 0) vertices.row(new_id[v]) = cage.vertices.row(v);
-  const int quad_count =
-      static_cast<int>(std::count(removed.begin(), removed.end(), char(0)));
+  const int quad_count = static_cast<int>(std::count(removed.begin(), removed.end(), char(0)));
   Quads quads(quad_count, 4);
   for (int q = 0, r = 0; q < cage.quads.rows(); ++q) {
     if (removed[q]) continue;
@@ -171,7 +172,7 @@ int remove_doublets(QuadCage& cage) {
     std::vector<char> removed(cage.quads.rows(), 0);
     int now = 0;
     // The corners of quad q from the one at v, counter-clockwise.
-    auto from = [&](int q, int v, int (&c)[4]) {
+    auto from = [&](int q, int v, int(&c)[4]) {
       int k = 0;
       while (k < 4 && cage.quads(q, k) != v) ++k;
       for (int j = 0; j < 4; ++j) c[j] = cage.quads(q, (k + j) % 4);
@@ -189,7 +190,7 @@ int remove_doublets(QuadCage& cage) {
       for (int k = 0; k < 4; ++k) touched[a[k]] = touched[b[k]] = 1;
       // The two quads become one: b, x, a, y.
       cage.quads(q1, 0) = a[1], cage.quads(q1, 1) = a[2], cage.quads(q1, 2) = a[3],
-      cage.quads(q1, 3) = b[2];
+                     cage.quads(q1, 3) = b[2];
       removed[q2] = 1;
       merged_into[v] = -2;
       ++now;
@@ -227,9 +228,12 @@ int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step) {
       if (landed_normal.dot(normal) < 0.5) continue;
       cage.vertices.row(v) = landed.transpose();
       bool ok = true;
-      for (int q : quads_of[v]) ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
-      if (!ok) cage.vertices.row(v) = old.transpose();
-      else ++moved;
+      for (int q : quads_of[v])
+        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
+      if (!ok)
+        cage.vertices.row(v) = old.transpose();
+      else
+        ++moved;
     }
   }
   return moved;
