@@ -50,11 +50,9 @@ json composed_json(const Result& result) {
 }
 
 json compose_diagnostics(const Result& result) {
+  // compose() already copies every contact's diagnostics into its report's, in order.
   json diagnostics = json::array();
   for (const auto& d : result.composed.report.diagnostics) diagnostics.push_back("compose: " + d);
-  for (const auto& contact : result.composed.contacts) {
-    for (const auto& d : contact.diagnostics) diagnostics.push_back("compose: " + d);
-  }
   return diagnostics;
 }
 
