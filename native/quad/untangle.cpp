@@ -130,33 +130,43 @@ std::set<int> smooth_cage(const ComponentLocator& locator, const DesignNormals& 
   return moved_ever;
 }
 
-// Drops the quads flagged in `removed` and every vertex v with merged_into[v] ≥ 0 (its
-// corners move to merged_into[v]) or, with merged_into[v] == -2, no quad left; renumbers
-// the vertices, chains and creases.
-void compact(QuadCage& cage, const std::vector<char>& removed,
-             const std::vector<int>& merged_into) {
-  const int nv = static_cast<int>(cage.vertices.rows());
-  std::vector<int> new_id(nv, -1);
-  int kept = 0;
-  for (int v = 0; v < nv; ++v)
-    if (merged_into[v] == -1) new_id[v] = kept++;
-  auto id = [&](int v) { return new_id[merged_into[v] >= 0 ? merged_into[v] : v]; };
-  Vertices vertices(kept, 3);
-  for (int v = 0; v < nv; ++v)
-    if (new_id[v] >= 0) vertices.row(new_id[v]) = cage.vertices.row(v);
-  const int quad_count = static_cast<int>(std::count(removed.begin(), removed.end(), char(0)));
-  Quads quads(quad_count, 4);
-  for (int q = 0, r = 0; q < cage.quads.rows(); ++q) {
-    if (removed[q]) continue;
-    for (int k = 0; k < 4; ++k) quads(r, k) = id(cage.quads(q, k));
-    ++r;
+// One batch of quad removals and vertex merges on a cage; apply() drops the removed quads
+// and every vertex v with merged_into[v] ≥ 0 (its corners move to merged_into[v]) or
+// merged_into[v] == -2 (no quad left), and renumbers the vertices, chains and creases.
+struct CageEdit {
+  explicit CageEdit(const QuadCage& cage)
+      : incidence(cage),
+        touched(cage.vertices.rows(), 0),
+        merged_into(cage.vertices.rows(), -1),
+        removed(cage.quads.rows(), 0) {}
+  CageIncidence incidence;       // of the cage before the batch
+  std::vector<char> touched;     // corners of quads this batch already edited
+  std::vector<int> merged_into;  // per vertex: -1 kept, ≥ 0 merged into, -2 dropped
+  std::vector<char> removed;     // per quad
+
+  void apply(QuadCage& cage) const {
+    const int nv = static_cast<int>(cage.vertices.rows());
+    std::vector<int> new_id(nv, -1);
+    int kept = 0;
+    for (int v = 0; v < nv; ++v)
+      if (merged_into[v] == -1) new_id[v] = kept++;
+    auto id = [&](int v) { return new_id[merged_into[v] >= 0 ? merged_into[v] : v]; };
+    Vertices vertices(kept, 3);
+    for (int v = 0; v < nv; ++v)
+      if (new_id[v] >= 0) vertices.row(new_id[v]) = cage.vertices.row(v);
+    Quads quads(static_cast<int>(std::count(removed.begin(), removed.end(), char(0))), 4);
+    for (int q = 0, r = 0; q < cage.quads.rows(); ++q) {
+      if (removed[q]) continue;
+      for (int k = 0; k < 4; ++k) quads(r, k) = id(cage.quads(q, k));
+      ++r;
+    }
+    for (auto& chain : cage.boundary_chains)
+      for (int& v : chain) v = id(v);
+    for (auto& e : cage.crease_edges) e = {id(e[0]), id(e[1])};
+    cage.vertices = std::move(vertices);
+    cage.quads = std::move(quads);
   }
-  for (auto& chain : cage.boundary_chains)
-    for (int& v : chain) v = id(v);
-  for (auto& e : cage.crease_edges) e = {id(e[0]), id(e[1])};
-  cage.vertices = std::move(vertices);
-  cage.quads = std::move(quads);
-}
+};
 
 }  // namespace
 
@@ -164,12 +174,10 @@ int remove_doublets(QuadCage& cage) {
   int removed_total = 0;
   for (int pass = 0; pass < 8; ++pass) {
     const int nv = static_cast<int>(cage.vertices.rows());
-    const CageIncidence incidence(cage);
-    const auto& fixed = incidence.on_chain;
-    const auto& quads_of = incidence.quads_of;
-    std::vector<char> touched(nv, 0);
-    std::vector<int> merged_into(nv, -1);
-    std::vector<char> removed(cage.quads.rows(), 0);
+    CageEdit edit(cage);
+    const auto& fixed = edit.incidence.on_chain;
+    const auto& quads_of = edit.incidence.quads_of;
+    auto& touched = edit.touched;
     int now = 0;
     // The corners of quad q from the one at v, counter-clockwise.
     auto from = [&](int q, int v, int(&c)[4]) {
@@ -191,12 +199,12 @@ int remove_doublets(QuadCage& cage) {
       // The two quads become one: b, x, a, y.
       cage.quads(q1, 0) = a[1], cage.quads(q1, 1) = a[2], cage.quads(q1, 2) = a[3],
                      cage.quads(q1, 3) = b[2];
-      removed[q2] = 1;
-      merged_into[v] = -2;
+      edit.removed[q2] = 1;
+      edit.merged_into[v] = -2;
       ++now;
     }
     if (!now) break;
-    compact(cage, removed, merged_into);
+    edit.apply(cage);
     removed_total += now;
   }
   return removed_total;
@@ -241,13 +249,10 @@ int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step) {
 
 int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad) {
-  const int nv = static_cast<int>(cage.vertices.rows());
-  const CageIncidence incidence(cage);
-  const auto& fixed = incidence.on_chain;
-  const auto& quads_of = incidence.quads_of;
-  std::vector<char> touched(nv, 0);
-  std::vector<int> merged_into(nv, -1);
-  std::vector<char> removed(cage.quads.rows(), 0);
+  CageEdit edit(cage);
+  const auto& fixed = edit.incidence.on_chain;
+  const auto& quads_of = edit.incidence.quads_of;
+  auto& touched = edit.touched;
   int collapsed = 0;
   for (int q : bad) {
     int best_k = -1;
@@ -287,11 +292,11 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
       const Vec3 mid = 0.5 * (cage.vertices.row(a) + cage.vertices.row(c)).transpose();
       cage.vertices.row(a) = locator.closest(mid, &normal).transpose();
     }  // else the interior end merges into the chain vertex, which stays on its loop
-    merged_into[c] = a;
-    removed[q] = 1;
+    edit.merged_into[c] = a;
+    edit.removed[q] = 1;
     ++collapsed;
   }
-  if (collapsed) compact(cage, removed, merged_into);
+  if (collapsed) edit.apply(cage);
   return collapsed;
 }
 
