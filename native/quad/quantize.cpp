@@ -33,22 +33,42 @@ struct ProblemDeleter {
   void operator()(glp_prob* p) const { glp_delete_prob(p); }
 };
 
+// Per arc: on how many patch sides it lies (1: a loop arc, with a patch on one side only).
+std::vector<int> sides_per_arc(const PatchLayout& layout) {
+  std::vector<int> sides_of(layout.arcs.size(), 0);
+  for (const Patch& patch : layout.patches)
+    for (const auto& side : patch.sides)
+      for (auto& [a, reversed] : side) ++sides_of[a];
+  return sides_of;
+}
+
+// The patches' two equalities Σ(side k) − Σ(side k + 2) = 0 as arc → coefficient, summed
+// (an arc on both opposite sides of one patch cancels there); rows that cancel entirely
+// are left out.
+struct SideRow {
+  int patch;
+  std::map<int, int> coefficients;
+};
+std::vector<SideRow> side_rows(const PatchLayout& layout) {
+  std::vector<SideRow> rows;
+  for (size_t p = 0; p < layout.patches.size(); ++p)
+    for (int pair = 0; pair < 2; ++pair) {
+      SideRow row{static_cast<int>(p), {}};
+      for (int side : {pair, pair + 2})
+        for (auto& [a, reversed] : layout.patches[p].sides[side])
+          row.coefficients[a] += side < 2 ? 1 : -1;
+      auto& c = row.coefficients;
+      for (auto it = c.begin(); it != c.end();) it = it->second ? std::next(it) : c.erase(it);
+      if (!c.empty()) rows.push_back(std::move(row));
+    }
+  return rows;
+}
+
 // One exact solve with per-arc lower bounds (0 or 1).
 bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<int>& lower,
            std::string* failure) {
   const int arcs = static_cast<int>(layout.arcs.size());
-  // Rows: the patches' two equalities, with an arc's coefficients summed (an arc on both
-  // opposite sides of one patch cancels there).
-  std::vector<std::map<int, int>> rows;
-  for (const Patch& patch : layout.patches)
-    for (int pair = 0; pair < 2; ++pair) {
-      std::map<int, int> row;
-      for (int side : {pair, pair + 2})
-        for (auto& [a, reversed] : patch.sides[side]) row[a] += side < 2 ? 1 : -1;
-      for (auto it = row.begin(); it != row.end();) it = it->second ? std::next(it) : row.erase(it);
-      if (row.empty()) continue;
-      rows.push_back(std::move(row));
-    }
+  const std::vector<SideRow> rows = side_rows(layout);
   glp_term_out(GLP_OFF);
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
@@ -88,7 +108,8 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   for (size_t r = 0; r < rows.size(); ++r) {
     const int row = link_rows + static_cast<int>(r) + 1;
     glp_set_row_bnds(lp, row, GLP_FX, 0, 0);
-    for (auto& [a, c] : rows[r]) ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
+    for (auto& [a, c] : rows[r].coefficients)
+      ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
   }
   glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
   glp_iocp parameters;
@@ -115,10 +136,8 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
 
 std::vector<int> unbalanced_patches(const PatchLayout& layout) {
   const int arcs = static_cast<int>(layout.arcs.size());
-  std::vector<int> sides_of(arcs, 0);
-  for (const Patch& patch : layout.patches)
-    for (const auto& side : patch.sides)
-      for (auto& [a, reversed] : side) ++sides_of[a];
+  const std::vector<int> sides_of = sides_per_arc(layout);
+  const std::vector<SideRow> rows = side_rows(layout);
   glp_term_out(GLP_OFF);
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
@@ -127,35 +146,28 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
   for (int a = 0; a < arcs; ++a) glp_set_col_bnds(lp, a + 1, GLP_LO, sides_of[a] == 1 ? 1 : 0, 0);
   std::vector<int> ia{0}, ja{0};
   std::vector<double> ar{0};
-  std::vector<int> row_patch;
-  for (size_t p = 0; p < layout.patches.size(); ++p)
-    for (int pair = 0; pair < 2; ++pair) {
-      std::map<int, int> row;
-      for (int side : {pair, pair + 2})
-        for (auto& [a, reversed] : layout.patches[p].sides[side]) row[a] += side < 2 ? 1 : -1;
-      const int r = glp_add_rows(lp, 1);
-      glp_set_row_bnds(lp, r, GLP_FX, 0, 0);
-      for (auto& [a, c] : row)
-        if (c) ia.push_back(r), ja.push_back(a + 1), ar.push_back(c);
-      const int slack = glp_add_cols(lp, 2);  // s⁺ − s⁻, both priced 1
-      for (int k = 0; k < 2; ++k) {
-        glp_set_col_bnds(lp, slack + k, GLP_LO, 0, 0);
-        glp_set_obj_coef(lp, slack + k, 1);
-        ia.push_back(r), ja.push_back(slack + k), ar.push_back(k ? -1.0 : 1.0);
-      }
-      row_patch.push_back(static_cast<int>(p));
+  for (const SideRow& row : rows) {
+    const int r = glp_add_rows(lp, 1);
+    glp_set_row_bnds(lp, r, GLP_FX, 0, 0);
+    for (auto& [a, c] : row.coefficients) ia.push_back(r), ja.push_back(a + 1), ar.push_back(c);
+    const int slack = glp_add_cols(lp, 2);  // s⁺ − s⁻, both priced 1
+    for (int k = 0; k < 2; ++k) {
+      glp_set_col_bnds(lp, slack + k, GLP_LO, 0, 0);
+      glp_set_obj_coef(lp, slack + k, 1);
+      ia.push_back(r), ja.push_back(slack + k), ar.push_back(k ? -1.0 : 1.0);
     }
+  }
   glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
   glp_smcp parameters;
   glp_init_smcp(&parameters);
   parameters.msg_lev = GLP_MSG_OFF;
   std::vector<int> out;
   if (glp_simplex(lp, &parameters) != 0 || glp_get_status(lp) != GLP_OPT) return out;
-  for (size_t r = 0; r < row_patch.size(); ++r) {
+  for (size_t r = 0; r < rows.size(); ++r) {
     const int slack = arcs + 2 * static_cast<int>(r) + 1;
     if (glp_get_col_prim(lp, slack) + glp_get_col_prim(lp, slack + 1) > 1e-9 &&
-        (out.empty() || out.back() != row_patch[r]))
-      out.push_back(row_patch[r]);
+        (out.empty() || out.back() != rows[r].patch))
+      out.push_back(rows[r].patch);
   }
   return out;
 }
@@ -173,10 +185,7 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
 bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* failure,
               bool* relaxed) {
   const int arcs = static_cast<int>(layout.arcs.size());
-  std::vector<int> sides_of(arcs, 0);
-  for (const Patch& patch : layout.patches)
-    for (const auto& side : patch.sides)
-      for (auto& [a, reversed] : side) ++sides_of[a];
+  const std::vector<int> sides_of = sides_per_arc(layout);
   *relaxed = false;
   std::vector<int> lower(arcs, 1);
   for (int a = 0; a < arcs; ++a)
