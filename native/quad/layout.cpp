@@ -154,16 +154,25 @@ bool remove_stretch(const Surface& s, Layout& layout, std::vector<int> vertices)
   return false;
 }
 
+// The vertices of the shortest of `arcs` that lies on an open curve (a separatrix or cut,
+// not a loop); empty if there is none.
+std::vector<int> shortest_open_arc(const Layout& layout, const PatchLayout& patches,
+                                   const std::vector<int>& arcs) {
+  int best = -1;
+  for (int a : arcs) {
+    if (layout.curves[patches.arcs[a].curve].closed) continue;
+    if (best < 0 || patches.arcs[a].length < patches.arcs[best].length) best = a;
+  }
+  return best < 0 ? std::vector<int>() : patches.arcs[best].vertices;
+}
+
 }  // namespace
 
 bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch) {
-  int best = -1;
+  std::vector<int> arcs;
   for (const auto& side : patches.patches[patch].sides)
-    for (auto& [a, reversed] : side) {
-      if (layout.curves[patches.arcs[a].curve].closed) continue;
-      if (best < 0 || patches.arcs[a].length < patches.arcs[best].length) best = a;
-    }
-  return best >= 0 && remove_stretch(s, layout, patches.arcs[best].vertices);
+    for (auto& [a, reversed] : side) arcs.push_back(a);
+  return remove_stretch(s, layout, shortest_open_arc(layout, patches, arcs));
 }
 
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
@@ -204,15 +213,11 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     };
     // The shortest arc of an open curve on the patch boundary, to merge the patch with its
     // neighbour when it cannot be cut.
-    auto shortest_open_arc = [&](const std::vector<Cycle>& cycles) {
-      int best = -1;
+    auto shortest_open_arc_of = [&](const std::vector<Cycle>& cycles) {
+      std::vector<int> arcs;
       for (const Cycle& c : cycles)
-        for (int h : c.halfedges) {
-          const int a = out.halfedge_arc[h] / 2;
-          if (layout.curves[out.arcs[a].curve].closed) continue;
-          if (best < 0 || out.arcs[a].length < out.arcs[best].length) best = a;
-        }
-      return best < 0 ? std::vector<int>() : out.arcs[best].vertices;
+        for (int h : c.halfedges) arcs.push_back(out.halfedge_arc[h] / 2);
+      return shortest_open_arc(layout, out, arcs);
     };
     // Last resort for a disk: its four sharpest boundary turns become the corners.
     auto force_corners = [&](const Cycle& c, Fix& fix) {
@@ -365,7 +370,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           fixes.push_back(middle_cuts(cycles));
           force_corners(cycle, fixes.back());
           // A one-triangle sliver between curves can be neither cut nor forced: merge it.
-          if (fixes.back().forced.empty()) fixes.back().remove_stretch = shortest_open_arc(cycles);
+          if (fixes.back().forced.empty()) fixes.back().remove_stretch = shortest_open_arc_of(cycles);
           continue;
         }
         quarter_override[pick->halfedge_out] = turning > 4 ? 2 : 1;
@@ -381,7 +386,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           fixes.push_back(middle_cuts(cycles));
           force_corners(cycle, fixes.back());
           // A one-triangle sliver between curves can be neither cut nor forced: merge it.
-          if (fixes.back().forced.empty()) fixes.back().remove_stretch = shortest_open_arc(cycles);
+          if (fixes.back().forced.empty()) fixes.back().remove_stretch = shortest_open_arc_of(cycles);
           continue;
         }
         for (size_t i = 0; i < best.size(); ++i)
