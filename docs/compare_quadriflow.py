@@ -32,7 +32,7 @@ import numpy as np
 from mathutils import Matrix, Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from render_result import cycles_png, light  # noqa: E402  (render settings the docs share)
+from render_result import cycles_png, frame, light  # noqa: E402  (render settings the docs share)
 from mathutils.bvhtree import BVHTree
 
 
@@ -387,22 +387,6 @@ def view_direction(bm):
     return mean.normalized() + 0.4 * oblique
 
 
-def frame(scene, objects, direction):
-    """One camera for both panels, looking along -direction at the objects' bounds."""
-    corners = [o.matrix_world @ Vector(c) for o in objects for c in o.bound_box]
-    low = Vector(tuple(min(c[i] for c in corners) for i in range(3)))
-    high = Vector(tuple(max(c[i] for c in corners) for i in range(3)))
-    center, radius = (low + high) / 2, (high - low).length / 2
-    camera = scene.camera or link(bpy.data.objects.new("camera", bpy.data.cameras.new("camera")))
-    aspect = scene.render.resolution_y / scene.render.resolution_x
-    half_fov = math.atan(camera.data.sensor_width / 2 * aspect / camera.data.lens)
-    direction = Vector(direction).normalized()
-    camera.location = center + direction * (radius / math.sin(half_fov) * 1.05)
-    camera.rotation_euler = (-direction).to_track_quat("-Z", "Y").to_euler()
-    camera.data.clip_end = radius * 20
-    scene.camera = camera
-
-
 def render_panels(scene, panels, out):
     """Renders each (title, objects) panel alone and writes them side by side into out."""
     strips = []
@@ -498,7 +482,9 @@ def compare(args, scene, design_objects, component, mats):
                            [remesh, wire_object(remesh, 0.004 * size, mats["wire"]), tube,
                             balls("irregular qf", remesh_points, 0.012 * size,
                                   mats["irregular"])]))
-        frame(scene, [region], args.view or view_direction(region_bm))
+        # One camera for both panels, a little farther than render_result's crop.
+        frame(scene, [region], args.view or view_direction(region_bm), margin=1.05,
+              camera=scene.camera)
         render_panels(scene, panels, out)
         figures["png"] = out
     return figures

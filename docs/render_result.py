@@ -36,18 +36,21 @@ def result_objects(scene):
     return [o for c in collections for o in c.all_objects if not o.hide_render]
 
 
-def frame(scene, objects, direction):
-    """Camera looking along -direction at the objects' bounding sphere, filling the frame."""
+def frame(scene, objects, direction, margin=0.75, camera=None):
+    """Camera looking along -direction at the objects' bounding sphere. `margin` scales the
+    distance at which the sphere just fits (0.75 crops it to fill the frame); `camera` is
+    moved if given, else a new one is made."""
     corners = [o.matrix_world @ Vector(c) for o in objects for c in o.bound_box]
     low = Vector(tuple(min(c[i] for c in corners) for i in range(3)))
     high = Vector(tuple(max(c[i] for c in corners) for i in range(3)))
     center, radius = (low + high) / 2, (high - low).length / 2
-    camera = bpy.data.objects.new("render camera", bpy.data.cameras.new("render camera"))
-    scene.collection.objects.link(camera)
+    if camera is None:
+        camera = bpy.data.objects.new("render camera", bpy.data.cameras.new("render camera"))
+        scene.collection.objects.link(camera)
     aspect = scene.render.resolution_y / scene.render.resolution_x
     half_fov = math.atan(camera.data.sensor_width / 2 * aspect / camera.data.lens)
     direction = Vector(direction).normalized()
-    camera.location = center + direction * (radius / math.sin(half_fov) * 0.75)
+    camera.location = center + direction * (radius / math.sin(half_fov) * margin)
     camera.rotation_euler = (-direction).to_track_quat("-Z", "Y").to_euler()
     camera.data.clip_end = radius * 20
     scene.camera = camera
