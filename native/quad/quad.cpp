@@ -72,6 +72,10 @@ bool DesignNormals::flipped(const Vec3 (&c)[4]) const {
 }  // namespace quad_detail
 
 QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
+  return quad_detail::measure_cage(cage, quad_detail::DesignNormals(design));
+}
+
+QuadStats quad_detail::measure_cage(const QuadCage& cage, const DesignNormals& normals) {
   QuadStats stats;
   stats.quads = static_cast<int>(cage.quads.rows());
   stats.vertices = static_cast<int>(cage.vertices.rows());
@@ -100,7 +104,6 @@ QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
   }
   stats.irregular_vertices = (stats.interior_vertices - stats.interior_valence4) +
                              (stats.boundary_vertices - stats.boundary_valence3);
-  const quad_detail::DesignNormals normals(design);
   double angle_sum = 0;
   int corners = 0;
   for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
@@ -160,14 +163,15 @@ namespace {
 // Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
 // reported. A valid cage is then evened out (relax_cage: 10 sweeps, half steps), kept if
 // it stays valid and its corners come closer to 90°.
-QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& design,
-                            QuadCage* cage, Diagnostics* diagnostics) {
-  QuadStats stats = measure_cage(*cage, design);
+QuadStats measure_untangled(const quad_detail::Surface& surface,
+                            const quad_detail::CageChecks& checks, QuadCage* cage,
+                            Diagnostics* diagnostics) {
+  QuadStats stats = quad_detail::measure_cage(*cage, checks.normals);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
     int collapsed = 0;
-    const int moved = quad_detail::untangle_cage(surface, *cage, 24, &collapsed);
-    stats = measure_cage(*cage, design);
+    const int moved = quad_detail::untangle_cage(checks, *cage, 24, &collapsed);
+    stats = quad_detail::measure_cage(*cage, checks.normals);
     stats.collapsed_quads = collapsed;
     diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
                            std::to_string(bad) + " degenerate or flipped quads after filling; " +
@@ -180,8 +184,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface, const TriMesh& 
   }
   if (stats.flipped_quads || stats.degenerate_quads) return stats;
   QuadCage relaxed = *cage;
-  quad_detail::relax_cage(surface, relaxed, 10, 0.5);
-  QuadStats relaxed_stats = measure_cage(relaxed, design);
+  quad_detail::relax_cage(checks, relaxed, 10, 0.5);
+  QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks.normals);
   if (!relaxed_stats.flipped_quads && !relaxed_stats.degenerate_quads &&
       relaxed_stats.mean_angle_deviation_deg < stats.mean_angle_deviation_deg) {
     relaxed_stats.collapsed_quads = stats.collapsed_quads;
@@ -257,7 +261,7 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why) {
 
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid.
-void extract_once(const quad_detail::Surface& surface, const TriMesh& design,
+void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
                   const QuadOptions& options, std::set<std::size_t>* seen_layouts,
                   QuadCage* cage, QuadStats* stats, Diagnostics* diagnostics) {
   const auto start = std::chrono::steady_clock::now();
@@ -309,7 +313,7 @@ void extract_once(const quad_detail::Surface& surface, const TriMesh& design,
   if (const int doublets = quad_detail::remove_doublets(*cage))
     diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
                            " doublets (interior vertices of two quads) removed");
-  *stats = measure_untangled(surface, design, cage, diagnostics);
+  *stats = measure_untangled(surface, checks, cage, diagnostics);
   stats->patches = static_cast<int>(patches.patches.size());
   stats->separatrices = layout.separatrices;
   stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -385,6 +389,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         variants.push_back({name, o});
       }
   const quad_detail::Surface surface(design, partition, field, c);
+  const quad_detail::CageChecks checks(surface);
   std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
   int best = -1;
@@ -396,7 +401,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     QuadStats stats;
     Diagnostics diagnostics;
     try {
-      extract_once(surface, design, variants[k].options, &seen_layouts, &cage, &stats,
+      extract_once(surface, checks, variants[k].options, &seen_layouts, &cage, &stats,
                    &diagnostics);
     } catch (const Error& e) {
       if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
@@ -451,7 +456,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
     cage = quad_detail::fallback_cage(surface, factor * size);
     untangled.clear();
-    stats = measure_untangled(surface, design, &cage, &untangled);
+    stats = measure_untangled(surface, checks, &cage, &untangled);
     scale = factor;
     std::string why;
     valid = !stats.flipped_quads && !stats.degenerate_quads && cage_is_manifold(cage, &why);

@@ -210,9 +210,9 @@ int remove_doublets(QuadCage& cage) {
   return removed_total;
 }
 
-int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step) {
-  const ComponentLocator locator(s);
-  const DesignNormals normals(s.mesh);
+int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step) {
+  const ComponentLocator& locator = checks.locator;
+  const DesignNormals& normals = checks.normals;
   const int nv = static_cast<int>(cage.vertices.rows());
   const CageIncidence incidence(cage);
   const auto& neighbours = incidence.neighbours;
@@ -300,9 +300,9 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
   return collapsed;
 }
 
-int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collapsed) {
-  const ComponentLocator locator(s);
-  const DesignNormals normals(s.mesh);
+int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed) {
+  const ComponentLocator& locator = checks.locator;
+  const DesignNormals& normals = checks.normals;
   std::vector<int> bad;
   int moved = static_cast<int>(
       smooth_cage(locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());

@@ -232,8 +232,9 @@ TEST(Quad, UntangleOpensAFoldAndADiagonalCollapseKeepsTheCageValid) {
   const Vec3 p0 = folded.vertices.row(moved).transpose();
   folded.vertices.row(moved) = (centre + 1.6 * (centre - p0)).transpose();
   EXPECT_GT(measure_cage(folded, r.mesh).flipped_quads, 0);
+  const quad_detail::CageChecks checks(surface);
   int collapsed = -1;
-  quad_detail::untangle_cage(surface, folded, 24, &collapsed);
+  quad_detail::untangle_cage(checks, folded, 24, &collapsed);
   const QuadStats repaired = measure_cage(folded, r.mesh);
   EXPECT_EQ(repaired.flipped_quads, 0);
   EXPECT_EQ(repaired.degenerate_quads, 0);
@@ -241,8 +242,7 @@ TEST(Quad, UntangleOpensAFoldAndADiagonalCollapseKeepsTheCageValid) {
 
   // Diagonal collapse of the same quad.
   QuadCage cage = original;
-  const quad_detail::ComponentLocator locator(surface);
-  ASSERT_EQ(quad_detail::collapse_diagonals(locator, cage, {pick}), 1);
+  ASSERT_EQ(quad_detail::collapse_diagonals(checks.locator, cage, {pick}), 1);
   EXPECT_EQ(cage.quads.rows(), original.quads.rows() - 1);
   EXPECT_EQ(cage.vertices.rows(), original.vertices.rows() - 1);
   EXPECT_EQ(check_cage(cage, r), 0);

@@ -159,6 +159,17 @@ class DesignNormals {
   std::array<long, 3> key(const Vec3& p) const;
 };
 
+// What measuring and repairing a cage test against, built once per component: closest
+// points on the component and the design's vertex normals.
+struct CageChecks {
+  explicit CageChecks(const Surface& s) : locator(s), normals(s.mesh) {}
+  ComponentLocator locator;
+  DesignNormals normals;
+};
+
+// measure_cage (quad.h) with the design's normals already built.
+QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
+
 // Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
 // within a few rings of them are smoothed and projected back onto the component, for at
 // most `max_rounds` rounds (untangle.cpp). Returns how many vertices moved.
@@ -174,14 +185,14 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 // the mean of its neighbours, in its tangent plane and back onto the component; a move
 // that would make one of its quads squeezed or turned over is undone. Returns the vertices
 // moved in the last sweep.
-int relax_cage(const Surface& s, QuadCage& cage, int sweeps, double step);
+int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step);
 // Removes doublets: an interior cage vertex with only two quads, which share two edges,
 // goes and the two quads become one. Returns how many (collapsed sliver patches leave
 // them; the limit surface folds at a doublet).
 int remove_doublets(QuadCage& cage);
 // Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
 // and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
-int untangle_cage(const Surface& s, QuadCage& cage, int max_rounds, int* collapsed);
+int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed);
 
 // Last resort: a pure-quad cage that is not field-aligned (fallback.cpp), from a coarse
 // remesh at `coarse_edge_length` split once (cage edges about half that long).
