@@ -262,22 +262,32 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       for (size_t k = 0; k < ranked.size() && k < 24; ++k) fix.cuts.push_back(ranked[k].second);
       return fix;
     };
+    std::vector<int> vertex_stamp(s.mesh.n_vertices(), -1);
+    std::vector<int> halfedge_stamp(s.mesh.n_halfedges(), -1), boundary_at(s.mesh.n_halfedges(), 0);
+    int visit = 0;  // stamp of this examination (a patch can be examined again: --p below)
     for (int p = 0; p < static_cast<int>(patch_faces.size()); ++p) {
+      ++visit;
       // Boundary cycles and the Euler characteristic of the patch.
+      // V − E + F with E = (3F + halfedges whose other side is not in the patch) / 2;
+      // vertices and boundary halfedges are marked with this examination's stamp.
       std::vector<int> boundary;
-      std::vector<int> verts, edges;
+      long vertex_count = 0, open_halfedges = 0;
       for (int f : patch_faces[p])
         for (auto h : s.mesh.fh_range(s.mesh.face_handle(f))) {
-          edges.push_back(h.idx() >> 1);
-          verts.push_back(s.from(h.idx()));
+          const int v = s.from(h.idx());
+          if (vertex_stamp[v] != visit) {
+            vertex_stamp[v] = visit;
+            ++vertex_count;
+          }
+          const int g = s.face(h.idx() ^ 1);
+          if (g < 0 || patch_of[g] != p) ++open_halfedges;
           if (layout.edge_curve[h.idx() >> 1] >= 0) boundary.push_back(h.idx());
         }
-      std::sort(verts.begin(), verts.end());
-      std::sort(edges.begin(), edges.end());
-      const long chi = long(std::unique(verts.begin(), verts.end()) - verts.begin()) -
-                       long(std::unique(edges.begin(), edges.end()) - edges.begin()) +
-                       long(patch_faces[p].size());
-      std::sort(boundary.begin(), boundary.end());
+      std::sort(boundary.begin(), boundary.end());  // cycles start at their lowest halfedge
+      for (size_t b = 0; b < boundary.size(); ++b)
+        halfedge_stamp[boundary[b]] = visit, boundary_at[boundary[b]] = static_cast<int>(b);
+      const long face_count = static_cast<long>(patch_faces[p].size());
+      const long chi = vertex_count - (3 * face_count + open_halfedges) / 2 + face_count;
       std::vector<char> used(boundary.size(), 0);
       std::vector<Cycle> cycles;
       for (size_t b = 0; b < boundary.size(); ++b) {
@@ -285,8 +295,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         Cycle cycle;
         int h = boundary[b];
         for (size_t guard = 0; guard <= boundary.size(); ++guard) {
-          const size_t at = std::lower_bound(boundary.begin(), boundary.end(), h) - boundary.begin();
-          if (at >= boundary.size() || boundary[at] != h || used[at]) break;
+          if (halfedge_stamp[h] != visit || used[boundary_at[h]]) break;
+          const size_t at = static_cast<size_t>(boundary_at[h]);
           used[at] = 1;
           cycle.halfedges.push_back(h);
           h = next_on_boundary(s, layout, h);

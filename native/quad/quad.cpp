@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <set>
@@ -268,6 +269,14 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
   quad_detail::trace_separatrices(surface, layout, options, *diagnostics);
+  // The rest is deterministic in the traced curves and the options it reads: a choice
+  // that traced the same curves as an earlier one with the same options gives its result.
+  std::size_t traced = (options.fit_corners ? 2u : 1u) * 1000003u +
+                       static_cast<std::size_t>(options.max_balance_rounds);
+  for (const auto& curve : layout.curves)
+    for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
+  GENBREP_CHECK(seen_layouts->insert(traced).second, Code::StageFailure,
+                "quad: component " + std::to_string(c) + ": the same layout as an earlier choice");
   // A layout whose sides cannot balance (a strip that would need a loop arc at 0 edges)
   // has its unbalanced patches merged with a neighbour, a few rounds at most.
   quad_detail::PatchLayout patches;
@@ -326,6 +335,51 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   GENBREP_CHECK(stats->flipped_quads == 0 && stats->degenerate_quads == 0, Code::StageFailure,
                 "the cage has " + std::to_string(stats->flipped_quads) + " flipped and " +
                     std::to_string(stats->degenerate_quads) + " degenerate quads");
+}
+
+// How often the component's triangles are split for tracing (QuadOptions::
+// trace_edges_per_cage_edge): the mean target size over the mean length of its edges.
+int refine_levels(const quad_detail::Surface& s, const QuadOptions& options) {
+  if (options.trace_edges_per_cage_edge <= 0) return 0;
+  double size = 0, length = 0;
+  int edges = 0;
+  for (int v : s.vertices) size += s.vertex_size[v];
+  size /= std::max<size_t>(1, s.vertices.size()) * options.density;
+  for (auto e : s.mesh.edges()) {
+    const auto h = s.mesh.halfedge_handle(e, 0);
+    if (!s.in(s.face(h.idx())) && !s.in(s.face(h.idx() ^ 1))) continue;
+    length += (s.point[s.to(h.idx())] - s.point[s.from(h.idx())]).norm();
+    ++edges;
+  }
+  if (!edges || length <= 0) return 0;
+  int levels = 0;
+  for (double span = size / (length / edges); span < options.trace_edges_per_cage_edge &&
+                                              levels < options.max_refine_levels;
+       span *= 2)
+    ++levels;
+  return levels;
+}
+
+// The factor (≥ 1) by which the density must rise for the component's cage to have
+// `vertices_per_singular_quarter` vertices per quarter turn of traced singularity index:
+// the quads the sizes give are Σ area / (size_u · size_v) over its triangles.
+double density_raise(const quad_detail::Surface& s, const QuadOptions& options) {
+  if (options.vertices_per_singular_quarter <= 0) return 1;
+  int quarters = 0;
+  for (const Singularity& sing : s.field.singularities)
+    if (sing.component == s.component && !sing.on_boundary) quarters += std::abs(sing.index);
+  double quads = 0;
+  for (auto f : s.mesh.faces()) {
+    if (!s.in(f.idx())) continue;
+    Vec3 corner[3];
+    int k = 0;
+    for (auto v : s.mesh.fv_range(f)) corner[k++] = s.point[v.idx()];
+    const double area = 0.5 * (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
+    quads += area / (s.field.size_u[f.idx()] * s.field.size_v[f.idx()]);
+  }
+  quads *= options.density * options.density;
+  const double wanted = options.vertices_per_singular_quarter * quarters;
+  return quads > 0 && quads < wanted ? std::sqrt(wanted / quads) : 1.0;
 }
 
 // Whether a cage meets issue 5's targets (interior valence 4 ≥ 95%, boundary valence 3
@@ -388,7 +442,24 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         }
         variants.push_back({name, o});
       }
-  const quad_detail::Surface surface(design, partition, field, c);
+  const quad_detail::Surface coarse(design, partition, field, c);
+  // Raise the density where singularities are dense (QuadOptions::vertices_per_singular_quarter).
+  const double raise = density_raise(coarse, options);
+  if (raise > 1) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "component %d: density raised %.2gx so that its singularities are at most "
+                  "1 in %.0f cage vertices",
+                  c, raise, options.vertices_per_singular_quarter);
+    out->diagnostics.push_back(text);
+    for (auto& variant : variants) variant.options.density *= raise;
+  }
+  const int levels = refine_levels(coarse, variants[0].options);
+  quad_detail::RefinedDesign refined;
+  if (levels > 0) refined = quad_detail::refine_component(design, partition, field, c, levels);
+  const quad_detail::Surface surface = levels > 0
+      ? quad_detail::Surface(refined.mesh, refined.partition, refined.field, c)
+      : quad_detail::Surface(design, partition, field, c);
   const quad_detail::CageChecks checks(surface);
   std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
@@ -454,7 +525,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   bool valid = false;
   Diagnostics untangled;  // of the rejected tries too: only the last one's is kept
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
-    cage = quad_detail::fallback_cage(surface, factor * size);
+    cage = quad_detail::fallback_cage(coarse, factor * size);
     untangled.clear();
     stats = measure_untangled(surface, checks, &cage, &untangled);
     scale = factor;

@@ -5,6 +5,11 @@
 // (organic components, boundary loops with the organic side on the left) and the
 // CrossField of field/ (per-face 4-RoSy direction, size_u/size_v, singularities).
 // Method, per component:
+//   0. density and resolution: where the component's singularities are dense for the
+//      quads its sizes give (a genus-4 lattice needs 96), the density is raised so that
+//      they stay a small fraction of the cage vertices (vertices_per_singular_quarter,
+//      reported); then the component's triangles are split (refine.cpp, same surface)
+//      until a cage edge spans a few mesh edges, since separatrices follow mesh edges.
 //   1. layout: separatrices leave every interior singularity (one per sector of its cross)
 //      and every concave boundary corner, follow the field along mesh edges and stop where
 //      they meet a loop or an earlier separatrix (a motorcycle graph: separatrices can
@@ -70,6 +75,16 @@ struct QuadOptions {
   int max_balance_rounds = 8;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
   double density = 1.0;
+  // Separatrices follow mesh edges: the component's triangles are split (at most
+  // max_refine_levels times, each halving its edges) until a target cage edge spans at
+  // least this many mesh edges. 0: trace on the design's own edges.
+  double trace_edges_per_cage_edge = 4.0;
+  int max_refine_levels = 2;
+  // Interior cage vertices wanted per quarter turn of singularity index (Σ|index| over the
+  // component's traced singularities); where the field's sizes give fewer, the density is
+  // raised for that component (reported). A valence-5 vertex is one quarter turn: 40 keeps
+  // irregular vertices, with those the layout adds, under the 5% of issue 5. 0: never raise.
+  double vertices_per_singular_quarter = 40.0;
 };
 
 // Quality of one cage, measured on the cage itself (what report.json shows).

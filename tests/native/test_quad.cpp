@@ -384,6 +384,98 @@ TEST(Quad, ClosedSphereHasEightValenceThreeVertices) {
   expect_targets("sphere", result.stats[0]);
 }
 
+// Refinement for tracing (refine.cpp) on the tube: the component's triangles are split
+// but the surface, the loops, the other triangles and every parent's field stay as they
+// were; the result is still a closed 2-manifold with the same Euler characteristic.
+TEST(Quad, RefiningAComponentKeepsItsSurfaceLoopsAndField) {
+  const Partitioned r = relaxed(partition_scene(tube_scene(0.06)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  const int nv = static_cast<int>(r.mesh.n_vertices()), nf = static_cast<int>(r.mesh.n_faces());
+  const auto area_of = [](const TriMesh& m, const Partition& p, int component) {
+    double area = 0;
+    for (auto f : m.faces()) {
+      if (p.face_component[f.idx()] != component) continue;
+      std::vector<OpenMesh::Vec3d> c;
+      for (auto v : m.fv_range(f)) c.push_back(m.point(v));
+      area += 0.5 * OpenMesh::cross(c[1] - c[0], c[2] - c[0]).norm();
+    }
+    return area;
+  };
+  int interior_edges = 0, component_faces = 0;
+  for (auto e : r.mesh.edges()) {
+    const auto f0 = r.mesh.face_handle(r.mesh.halfedge_handle(e, 0));
+    const auto f1 = r.mesh.face_handle(r.mesh.halfedge_handle(e, 1));
+    interior_edges += f0.is_valid() && f1.is_valid() && r.partition.face_component[f0.idx()] == 0 &&
+                      r.partition.face_component[f1.idx()] == 0;
+  }
+  for (int f = 0; f < nf; ++f) component_faces += r.partition.face_component[f] == 0;
+  const quad_detail::RefinedDesign refined =
+      quad_detail::refine_component(r.mesh, r.partition, field, 0, 1);
+  const TriMesh& m = refined.mesh;
+  // One midpoint per interior edge; every component triangle splits into 2–4.
+  EXPECT_EQ(static_cast<int>(m.n_vertices()), nv + interior_edges);
+  EXPECT_GT(static_cast<int>(m.n_faces()), nf + 2 * component_faces);
+  EXPECT_EQ(static_cast<int>(m.n_vertices()) - static_cast<int>(m.n_edges()) + static_cast<int>(m.n_faces()),
+            nv - static_cast<int>(r.mesh.n_edges()) + nf);
+  for (auto h : m.halfedges()) EXPECT_FALSE(m.is_boundary(h));
+  // Same area, component by component; vertices and untouched triangles keep their index.
+  EXPECT_NEAR(area_of(m, refined.partition, 0), area_of(r.mesh, r.partition, 0), 1e-9);
+  EXPECT_NEAR(area_of(m, refined.partition, -1), area_of(r.mesh, r.partition, -1), 1e-9);
+  for (int v = 0; v < nv; ++v)
+    EXPECT_EQ(m.point(m.vertex_handle(v)), r.mesh.point(r.mesh.vertex_handle(v)));
+  // Loops: every loop edge is still an edge, with the component on one side only.
+  for (const BoundaryLoop& loop : refined.partition.loops)
+    for (size_t i = 0; i < loop.vertices.size(); ++i) {
+      const auto h = m.find_halfedge(m.vertex_handle(loop.vertices[i]),
+                                     m.vertex_handle(loop.vertices[(i + 1) % loop.vertices.size()]));
+      ASSERT_TRUE(h.is_valid());
+      const int a = refined.partition.face_component[m.face_handle(h).idx()];
+      const int b = refined.partition.face_component[m.face_handle(m.opposite_halfedge_handle(h)).idx()];
+      EXPECT_NE(a == 0, b == 0);
+    }
+  // Every child lies inside its parent's plane and carries the parent's direction: the
+  // direction of each refined triangle is one of the original rows and lies in its plane.
+  ASSERT_EQ(refined.field.direction.rows(), static_cast<Eigen::Index>(m.n_faces()));
+  ASSERT_EQ(refined.partition.face_component.size(), m.n_faces());
+  for (int f = 0; f < nf; ++f) EXPECT_EQ(refined.field.direction.row(f), field.direction.row(f));
+  for (auto f : m.faces()) {
+    if (refined.partition.face_component[f.idx()] != 0) continue;
+    std::vector<OpenMesh::Vec3d> c;
+    for (auto v : m.fv_range(f)) c.push_back(m.point(v));
+    const auto n = OpenMesh::cross(c[1] - c[0], c[2] - c[0]).normalized();
+    const Vec3 d = refined.field.direction.row(f.idx()).transpose();
+    EXPECT_LT(std::abs(d.dot(Vec3(n[0], n[1], n[2]))), 1e-6);
+  }
+}
+
+// Dense singularities raise the density: asking for 200 cage vertices per quarter turn
+// on the sphere (8 quarter turns: 1600 vertices, more than its sizes give) raises it,
+// reported, with clearly more vertices than the plain cage, and the targets still hold.
+TEST(Quad, DenseSingularitiesRaiseTheDensity) {
+  const Partitioned r = all_organic([](const Vec3& p) { return sphere_sdf(p, Vec3(0, 0, 0), 1.0); },
+                                  Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.06);
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  QuadOptions options;
+  const QuadResult plain = extract_cages(r.mesh, r.partition, field, options, Context());
+  options.vertices_per_singular_quarter = 200;
+  const QuadResult raised = extract_cages(r.mesh, r.partition, field, options, Context());
+  ASSERT_EQ(plain.cages.size(), 1u);
+  ASSERT_EQ(raised.cages.size(), 1u);
+  const auto reports_raise = [](const QuadResult& result) {
+    for (const auto& d : result.diagnostics)
+      if (d.find("density raised") != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_FALSE(reports_raise(plain));
+  EXPECT_TRUE(reports_raise(raised));
+  std::printf("[quad] sphere: %d cage vertices, %d with 200 per quarter turn\n",
+              plain.stats[0].vertices, raised.stats[0].vertices);
+  EXPECT_LT(plain.stats[0].vertices, 1600);
+  EXPECT_GT(raised.stats[0].vertices, 1.25 * plain.stats[0].vertices);
+  EXPECT_EQ(check_cage(raised.cages[0], r), 0);
+  expect_targets("sphere, raised", raised.stats[0]);
+}
+
 TEST(Quad, BoltHole) {
   const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
   int problems = 0;

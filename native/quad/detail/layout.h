@@ -17,6 +17,18 @@
 
 namespace genbrep::quad_detail {
 
+// The design with one component's triangles split `levels` times (refine.cpp): the same
+// surface, finer for tracing; vertex indices and the first child of every triangle keep
+// their index, so loops and singularities carry over unchanged.
+struct RefinedDesign {
+  TriMesh mesh;
+  Partition partition;
+  CrossField field;
+  int levels = 0;
+};
+RefinedDesign refine_component(const TriMesh& design, const Partition& partition,
+                               const CrossField& field, int component, int levels);
+
 // Read-only geometry of one organic component with the field on it.
 struct Surface {
   Surface(const TriMesh& mesh, const Partition& partition, const CrossField& field,
