@@ -3,6 +3,9 @@
 // of control points (LimitSurface::weights), so the L2 problem with the foot-point
 // parameters frozen is a sparse least-squares problem; parameter correction (re-projection)
 // between solves makes the alternation converge to a local minimum of the true distance.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -258,6 +261,23 @@ std::vector<std::array<int, 2>> quad_edges_of(const QuadCage& cage, const std::s
   return edges;
 }
 
+// Whether the cage's limit surface (tessellated with `samples` segments per quad edge)
+// intersects itself; exact predicates.
+bool limit_intersects_itself(const QuadCage& cage, int samples) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
+  const TriangleMesh t = tessellate_limit(cage, samples);
+  Mesh mesh;
+  std::vector<Mesh::Vertex_index> vertex;
+  for (Eigen::Index v = 0; v < t.vertices.rows(); ++v)
+    vertex.push_back(mesh.add_vertex(Kernel::Point_3(t.vertices(v, 0), t.vertices(v, 1), t.vertices(v, 2))));
+  for (Eigen::Index f = 0; f < t.triangles.rows(); ++f)
+    if (mesh.add_face(vertex[t.triangles(f, 0)], vertex[t.triangles(f, 1)], vertex[t.triangles(f, 2)]) ==
+        Mesh::null_face())
+      return true;  // not even an oriented manifold: a fold along a cage edge
+  return CGAL::Polygon_mesh_processing::does_self_intersect(mesh);
+}
+
 }  // namespace
 
 Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
@@ -359,6 +379,21 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
       run.alternate(f, all, true, false);
       report.bound_held = true;
     }
+  }
+
+  // A fit must not fold the surface: where the fitted limit surface intersects itself and
+  // the initial one does not (thin parts wrapped by long quads, where the least squares
+  // pulls opposite sides through each other), the initial cage is kept, reported.
+  if (options.fold_check_samples > 0 && limit_intersects_itself(f.cage, options.fold_check_samples) &&
+      !limit_intersects_itself(initial, options.fold_check_samples)) {
+    report.diagnostics.push_back(
+        "the fitted limit surface intersects itself and the initial one does not: the initial "
+        "cage is kept unfitted");
+    f = Fitting(initial);
+    f.measured = measure(f.surface, f.chains, problem, options);
+    report.refinements = 0;
+    report.bound_held = std::max(f.measured.max_design_to_limit, f.measured.max_limit_to_design) <= delta;
+    report.kept_initial = true;
   }
 
   const Measurement& m = f.measured;

@@ -133,6 +133,9 @@ struct FitOptions {
   // Segments per quad edge at which the limit surface is sampled to measure limit →
   // design distances (and per boundary edge for the boundary curve).
   int measure_samples = 4;
+  // Segments per quad edge of the limit tessellation tested for self-intersection: a fit
+  // that folds the surface where the initial cage's does not is undone (0: no test).
+  int fold_check_samples = 2;
 };
 
 // Measured, not estimated. "design → limit": each region vertex to its foot point on the
@@ -153,6 +156,8 @@ struct FitReport {
   // Tight and Smooth: max two-sided surface distance ≤ δ (for Smooth only informative);
   // BoundaryTight: the boundary distance ≤ δ (true when there are no boundary curves).
   bool bound_held = false;
+  // The fit folded the limit surface and was undone: the cage is the initial one.
+  bool kept_initial = false;
   Diagnostics diagnostics;
 };
 

@@ -240,6 +240,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
                        {"rounds", f.rounds},
                        {"refinements", f.refinements},
                        {"bound_held", f.bound_held},
+                       {"kept_initial", f.kept_initial},
                        {"seconds", f.seconds}};
       }
       cages.push_back(cage);

@@ -85,6 +85,7 @@ py::dict report_to_dict(const FitReport& r) {
   d["refinements"] = r.refinements;
   d["seconds"] = r.seconds;
   d["bound_held"] = r.bound_held;
+  d["kept_initial"] = r.kept_initial;
   d["diagnostics"] = r.diagnostics;
   return d;
 }

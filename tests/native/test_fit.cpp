@@ -9,6 +9,10 @@
 #include <map>
 #include <set>
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+
 #include "fit/fit.h"
 #include "level_set.h"
 
@@ -518,6 +522,46 @@ TEST(Fit, BoundaryTightSplitsBoundaryChordsUntilTheCurveHolds) {
   EXPECT_TRUE(fitted.report.bound_held);
   EXPECT_LE(fitted.report.max_boundary_distance, f.h);
   EXPECT_GT(fitted.cage.boundary_chains[0].size(), 4u);
+}
+
+// Independent of fit.cpp: whether the limit surface of a cage, tessellated with 4 segments
+// per quad edge, intersects itself (CGAL, exact predicates).
+bool limit_folds(const QuadCage& cage) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  CGAL::Surface_mesh<Kernel::Point_3> mesh;
+  const TriangleMesh t = tessellate_limit(cage, 4);
+  std::vector<CGAL::Surface_mesh<Kernel::Point_3>::Vertex_index> v;
+  for (Eigen::Index i = 0; i < t.vertices.rows(); ++i)
+    v.push_back(mesh.add_vertex(Kernel::Point_3(t.vertices(i, 0), t.vertices(i, 1), t.vertices(i, 2))));
+  for (Eigen::Index f = 0; f < t.triangles.rows(); ++f)
+    mesh.add_face(v[t.triangles(f, 0)], v[t.triangles(f, 1)], v[t.triangles(f, 2)]);
+  return CGAL::Polygon_mesh_processing::does_self_intersect(mesh);
+}
+
+// A fit must not fold the surface: the tube's region with its +x half moved 1.5 towards
+// −x, through the other half, pulls the cage's +x side through its −x side. The plain
+// fit's limit surface then intersects itself; with the check (the default) the initial
+// cage is kept, unchanged, and the report says so.
+TEST(Fit, AFitThatFoldsTheSurfaceIsUndone) {
+  Fixture f = tube_fixture(0.05, 0.8, 16, 4);
+  for (Eigen::Index i = 0; i < f.region.vertices.rows(); ++i)
+    if (f.region.vertices(i, 0) > 0) f.region.vertices(i, 0) -= 1.5;
+  f.curves.clear();
+  ASSERT_FALSE(limit_folds(f.cage));
+  FitOptions options;
+  options.fold_check_samples = 0;
+  const Fitted plain = fit_cage(f.cage, f.region, f.curves, options, Context());
+  EXPECT_FALSE(plain.report.kept_initial);
+  EXPECT_TRUE(limit_folds(plain.cage));
+  const Fitted checked = fit_cage(f.cage, f.region, f.curves, FitOptions(), Context());
+  print("folded tube", f, checked.report);
+  EXPECT_TRUE(checked.report.kept_initial);
+  EXPECT_FALSE(limit_folds(checked.cage));
+  ASSERT_EQ(checked.cage.vertices.rows(), f.cage.vertices.rows());
+  EXPECT_EQ((checked.cage.vertices - f.cage.vertices).norm(), 0.0);
+  bool reported = false;
+  for (const auto& d : checked.report.diagnostics) reported |= d.find("kept unfitted") != std::string::npos;
+  EXPECT_TRUE(reported);
 }
 
 TEST(Fit, Deterministic) {
