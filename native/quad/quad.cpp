@@ -400,7 +400,8 @@ bool comfortably_meets_targets(const QuadStats& s) {
 // which singularity pairs cancel, which singularities the boundary absorbs, whether
 // separatrices cross, whether unbalanced patches are merged). They are tried in turn, each
 // from scratch (a layout equal to an earlier one is not filled again), until a cage meets
-// the targets with a margin. Kept: among the cages meeting the targets, preferably one
+// the targets with a margin, or until the work budget after the first cage that meets them
+// is spent (QuadOptions::work_after_meeting). Kept: among the cages meeting the targets, preferably one
 // that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit
 // surface can fold), then the fewest irregular vertices, then the smallest mean corner
 // deviation; if none meets them, the valid cage with the smallest mean corner deviation.
@@ -460,14 +461,23 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   const quad_detail::Surface surface = levels > 0
       ? quad_detail::Surface(refined.mesh, refined.partition, refined.field, c)
       : quad_detail::Surface(design, partition, field, c);
-  const quad_detail::CageChecks checks(surface);
+  // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
+  const quad_detail::CageChecks checks(coarse);
   std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
   int best = -1;
   QuadCage best_cage;
   QuadStats best_stats;
   Diagnostics best_diagnostics;
+  // Once a cage meets the targets, more choices are tried only within a work budget:
+  // choices × the (refined) component's triangles (QuadOptions::work_after_meeting).
+  int first_meeting = -1;
+  int triangles = 0;
+  for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
+  const int choices_after_meeting =
+      static_cast<int>(options.work_after_meeting / std::max(1, triangles));
   for (size_t k = 0; k < variants.size(); ++k) {
+    if (first_meeting >= 0 && static_cast<int>(k) > first_meeting + choices_after_meeting) break;
     QuadCage cage;
     QuadStats stats;
     Diagnostics diagnostics;
@@ -499,6 +509,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       best_diagnostics = std::move(diagnostics);
     }
     if (comfortably_meets_targets(best_stats) && !best_stats.collapsed_quads) break;
+    if (first_meeting < 0 && meets_targets(stats)) first_meeting = static_cast<int>(k);
   }
   if (best >= 0) {
     out->diagnostics.insert(out->diagnostics.end(), best_diagnostics.begin(), best_diagnostics.end());
