@@ -135,7 +135,7 @@ struct FitOptions {
   int measure_samples = 4;
   // Segments per quad edge of the limit tessellation tested for self-intersection: a fit
   // that folds the surface where the initial cage's does not is undone (0: no test).
-  int fold_check_samples = 2;
+  int fold_check_samples = 4;
 };
 
 // Measured, not estimated. "design → limit": each region vertex to its foot point on the

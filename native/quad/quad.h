@@ -87,9 +87,9 @@ struct QuadOptions {
   int max_refine_levels = 2;
   // Interior cage vertices wanted per quarter turn of singularity index (Σ|index| over the
   // component's traced singularities); where the field's sizes give fewer, the density is
-  // raised for that component (reported). A valence-5 vertex is one quarter turn: 40 keeps
+  // raised for that component (reported). A valence-5 vertex is one quarter turn: 50 keeps
   // irregular vertices, with those the layout adds, under the 5% of issue 5. 0: never raise.
-  double vertices_per_singular_quarter = 40.0;
+  double vertices_per_singular_quarter = 50.0;
 };
 
 // Quality of one cage, measured on the cage itself (what report.json shows).
