@@ -33,7 +33,9 @@
 //                  then the interior in L2 with the boundary fixed.
 // Guarantees: the returned cage is pure quad with valid boundary chains; the report's
 // distances are measured, not estimated; numerical failure keeps the last good positions
-// and is reported in diagnostics. Deterministic (no threads, no unordered iteration).
+// and is reported in diagnostics; a fit whose limit surface intersects itself where the
+// initial cage's does not is undone (the initial cage is returned, report.kept_initial).
+// Deterministic (no threads, no unordered iteration).
 // Complexity per round: O(Q·s²) limit evaluations (Q quads, s samples per edge), O(N log)
 // closest-point queries for N region vertices, one sparse LDLᵀ of the control points.
 #pragma once
