@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <tuple>
 
@@ -458,9 +459,9 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   const int levels = refine_levels(coarse, variants[0].options);
   quad_detail::RefinedDesign refined;
   if (levels > 0) refined = quad_detail::refine_component(design, partition, field, c, levels);
-  const quad_detail::Surface surface = levels > 0
-      ? quad_detail::Surface(refined.mesh, refined.partition, refined.field, c)
-      : quad_detail::Surface(design, partition, field, c);
+  std::optional<quad_detail::Surface> refined_surface;
+  if (levels > 0) refined_surface.emplace(refined.mesh, refined.partition, refined.field, c);
+  const quad_detail::Surface& surface = refined_surface ? *refined_surface : coarse;
   // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
   const quad_detail::CageChecks checks(coarse);
   std::set<std::size_t> seen_layouts;
