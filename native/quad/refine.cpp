@@ -35,9 +35,9 @@ void append_rows(Rows& rows, const std::vector<int>& parent, Eigen::Index faces)
 }
 
 // One level: splits the component's interior edges of `in` into `out`.
-void refine_once(const RefinedDesign& in, int component, RefinedDesign* out) {
-  const TriMesh& mesh = in.mesh;
-  const auto& face_component = in.partition.face_component;
+void refine_once(const TriMesh& mesh, const Partition& partition, const CrossField& in_field,
+                 int component, RefinedDesign* out) {
+  const auto& face_component = partition.face_component;
   const int nv = static_cast<int>(mesh.n_vertices()), nf = static_cast<int>(mesh.n_faces());
   TriangleMesh soup;
   std::vector<Vec3> points(nv);
@@ -104,7 +104,7 @@ void refine_once(const RefinedDesign& in, int component, RefinedDesign* out) {
   out->mesh = to_trimesh(soup);
 
   // Partition: labels and component of the parent; loops, solids' faces and counts as they were.
-  out->partition = in.partition;
+  out->partition = partition;
   Partition& p = out->partition;
   for (int f : parent) {
     const int begin = p.face_offsets[f], end = p.face_offsets[f + 1];
@@ -114,7 +114,7 @@ void refine_once(const RefinedDesign& in, int component, RefinedDesign* out) {
     p.face_component.push_back(p.face_component[f]);
   }
   // Field: every per-face row of the parent.
-  out->field = in.field;
+  out->field = in_field;
   CrossField& field = out->field;
   append_rows(field.direction, parent, nf);
   append_rows(field.principal1, parent, nf);
@@ -132,10 +132,15 @@ void refine_once(const RefinedDesign& in, int component, RefinedDesign* out) {
 
 RefinedDesign refine_component(const TriMesh& design, const Partition& partition,
                                const CrossField& field, int component, int levels) {
-  RefinedDesign refined{design, partition, field, 0};
+  GENBREP_CHECK(levels >= 1, Code::Internal, "quad: refine_component needs at least one level");
+  // The first level reads the design itself; no copy of it is made.
+  RefinedDesign refined;
   for (int level = 0; level < levels; ++level) {
     RefinedDesign next;
-    refine_once(refined, component, &next);
+    if (level == 0)
+      refine_once(design, partition, field, component, &next);
+    else
+      refine_once(refined.mesh, refined.partition, refined.field, component, &next);
     next.levels = level + 1;
     refined = std::move(next);
   }

@@ -17,7 +17,7 @@
 
 namespace genbrep::quad_detail {
 
-// The design with one component's triangles split `levels` times (refine.cpp): the same
+// The design with one component's triangles split `levels` (≥ 1) times (refine.cpp): the same
 // surface, finer for tracing; vertex indices and the first child of every triangle keep
 // their index, so loops and singularities carry over unchanged.
 struct RefinedDesign {
