@@ -61,7 +61,9 @@ struct Rows {
 // Umbrella fairness: one row per free control point, P_i − mean(neighbours), where a
 // boundary-chain vertex's neighbours are its chain neighbours (curve fairness, so the
 // boundary is not pulled inwards). Scaled by √(μ / n).
-Sparse fairness_matrix(const QuadCage& cage, const std::vector<char>& free, double mu) {
+// `stiff` (empty or per control point): a factor on the fairness of that point's row.
+Sparse fairness_matrix(const QuadCage& cage, const std::vector<char>& free, double mu,
+                       const std::vector<double>& stiff) {
   const int n = static_cast<int>(cage.vertices.rows());
   std::vector<std::set<int>> neighbours(n), chain_neighbours(n);
   for (int q = 0; q < cage.quads.rows(); ++q) {
@@ -82,8 +84,9 @@ Sparse fairness_matrix(const QuadCage& cage, const std::vector<char>& free, doub
     if (!free[i]) continue;
     const std::set<int>& ring = chain_neighbours[i].empty() ? neighbours[i] : chain_neighbours[i];
     if (ring.empty()) continue;
-    triplets.emplace_back(i, i, scale);
-    for (int j : ring) triplets.emplace_back(i, j, -scale / ring.size());
+    const double row = stiff.empty() ? scale : scale * std::sqrt(stiff[i]);
+    triplets.emplace_back(i, i, row);
+    for (int j : ring) triplets.emplace_back(i, j, -row / ring.size());
   }
   Sparse f(n, n);
   f.setFromTriplets(triplets.begin(), triplets.end());
@@ -157,8 +160,13 @@ bool solve(const Rows& rows, const Sparse& fairness, const std::vector<char>& fr
   return true;
 }
 
+// The data points are the region's vertices (area-weighted) when there are at least
+// `min_points` of them. A region about as coarse as the cage (a density raised to the
+// design's resolution) leaves quads without data, which the least squares folds (lattice:
+// 1.2 region vertices per control point). Such a region is sampled instead at the
+// centroids of its triangles split n×n, n the smallest giving at least `min_points`.
 Problem make_problem(const TriangleMesh& region, const std::vector<std::vector<Vec3>>& curves,
-                     double boundary_weight) {
+                     double boundary_weight, long min_points) {
   Problem p(region);
   const int nv = static_cast<int>(region.vertices.rows());
   std::vector<double> area(nv, 0.0);
@@ -185,6 +193,33 @@ Problem make_problem(const TriangleMesh& region, const std::vector<std::vector<V
     if (area[v] <= 0) continue;
     p.points.push_back(region.vertices.row(v).transpose());
     p.point_weights.push_back(area[v] / total);
+  }
+  const long triangles = static_cast<long>(region.triangles.rows());
+  if (static_cast<long>(p.points.size()) < min_points) {
+    long n = 1;
+    while (triangles * n * n < min_points) ++n;
+    p.points.clear();
+    p.point_weights.clear();
+    // Sub-triangle centroids in barycentric steps of 1/n: the upright ones at (i + 1/3,
+    // j + 1/3)/n, the inverted ones at (i + 2/3, j + 2/3)/n; each stands for 1/n² of the area.
+    std::vector<std::array<double, 2>> at;
+    for (long i = 0; i < n; ++i) {
+      for (long j = 0; i + j < n; ++j) {
+        at.push_back({(i + 1.0 / 3) / n, (j + 1.0 / 3) / n});
+        if (i + j < n - 1) at.push_back({(i + 2.0 / 3) / n, (j + 2.0 / 3) / n});
+      }
+    }
+    for (long t = 0; t < triangles; ++t) {
+      const Vec3 a = region.vertices.row(region.triangles(t, 0)).transpose();
+      const Vec3 b = region.vertices.row(region.triangles(t, 1)).transpose();
+      const Vec3 c = region.vertices.row(region.triangles(t, 2)).transpose();
+      const double weight = 0.5 * (b - a).cross(c - a).norm() / (total * n * n);
+      if (!(weight > 0)) continue;
+      for (const auto& [x, y] : at) {
+        p.points.push_back(a + x * (b - a) + y * (c - a));
+        p.point_weights.push_back(weight);
+      }
+    }
   }
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
   p.median_edge = lengths[lengths.size() / 2];
@@ -222,11 +257,14 @@ struct Run {
   const Context& ctx;
   FitReport& report;
   std::vector<double> emphasis;  // per design point weight multiplier (Tight's reweighting)
+  std::vector<double> stiff;     // per control point fairness multiplier (fold smoothing)
 
   // Alternates solves over the `free` control points with re-projection; `use_points`
   // and `use_curves` choose the data terms. Leaves f.measured up to date.
   void alternate(Fitting& f, const std::vector<char>& free, bool use_points, bool use_curves) {
-    const Sparse fairness = fairness_matrix(f.cage, free, options.fairness_weight);
+    const Sparse fairness = fairness_matrix(
+        f.cage, free, options.fairness_weight,
+        stiff.size() == static_cast<size_t>(f.cage.vertices.rows()) ? stiff : std::vector<double>());
     for (int round = 0; round < options.rounds; ++round) {
       ctx.step("fit", std::min(1.0, 0.1 * report.rounds));
       Rows rows;
@@ -261,9 +299,10 @@ std::vector<std::array<int, 2>> quad_edges_of(const QuadCage& cage, const std::s
   return edges;
 }
 
-// Whether the cage's limit surface (tessellated with `samples` segments per quad edge)
-// intersects itself; exact predicates.
-bool limit_intersects_itself(const QuadCage& cage, int samples) {
+// The quads whose limit surface (tessellated with `samples` segments per quad edge) meets
+// the limit surface elsewhere, sorted; exact predicates. A tessellation that is not even an
+// oriented manifold (a fold along a cage edge) gives every quad.
+std::vector<int> folded_quads(const QuadCage& cage, int samples) {
   using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
   using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
   const TriangleMesh t = tessellate_limit(cage, samples);
@@ -271,11 +310,24 @@ bool limit_intersects_itself(const QuadCage& cage, int samples) {
   std::vector<Mesh::Vertex_index> vertex;
   for (Eigen::Index v = 0; v < t.vertices.rows(); ++v)
     vertex.push_back(mesh.add_vertex(Kernel::Point_3(t.vertices(v, 0), t.vertices(v, 1), t.vertices(v, 2))));
+  std::vector<int> all(cage.quads.rows());
+  for (size_t q = 0; q < all.size(); ++q) all[q] = static_cast<int>(q);
   for (Eigen::Index f = 0; f < t.triangles.rows(); ++f)
     if (mesh.add_face(vertex[t.triangles(f, 0)], vertex[t.triangles(f, 1)], vertex[t.triangles(f, 2)]) ==
         Mesh::null_face())
-      return true;  // not even an oriented manifold: a fold along a cage edge
-  return CGAL::Polygon_mesh_processing::does_self_intersect(mesh);
+      return all;
+  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  CGAL::Polygon_mesh_processing::self_intersections(mesh, std::back_inserter(pairs));
+  std::set<int> quads;
+  for (const auto& [a, b] : pairs) {
+    quads.insert(t.triangle_source[static_cast<size_t>(a)]);
+    quads.insert(t.triangle_source[static_cast<size_t>(b)]);
+  }
+  return std::vector<int>(quads.begin(), quads.end());
+}
+
+bool limit_intersects_itself(const QuadCage& cage, int samples) {
+  return !folded_quads(cage, samples).empty();
 }
 
 }  // namespace
@@ -289,7 +341,9 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
                 "fit: " + std::to_string(boundary_curves.size()) + " boundary curves for " +
                     std::to_string(initial.boundary_chains.size()) + " cage boundary chains");
   GENBREP_CHECK(options.rounds >= 1, Code::InvalidInput, "fit: rounds must be at least 1");
-  const Problem problem = make_problem(region, boundary_curves, options.boundary_weight);
+  const Problem problem =
+      make_problem(region, boundary_curves, options.boundary_weight,
+                   std::lround(options.points_per_control_point * static_cast<double>(initial.vertices.rows())));
   FitReport report;
   report.component = initial.component;
   report.strategy = options.strategy;
@@ -381,11 +435,66 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
     }
   }
 
-  // A fit must not fold the surface: where the fitted limit surface intersects itself and
+  // A fit must not fold the surface. Where the fitted limit surface intersects itself and
   // the initial one does not (thin parts wrapped by long quads, where the least squares
-  // pulls opposite sides through each other), the initial cage is kept, reported.
-  if (options.fold_check_samples > 0 && limit_intersects_itself(f.cage, options.fold_check_samples) &&
-      !limit_intersects_itself(initial, options.fold_check_samples)) {
+  // pulls opposite sides through each other), the control points around the folded quads
+  // are held smoother and the fit repeated (fold_smoothing_rounds, fairness ×
+  // fold_stiffness each round); if it still folds, the initial cage is kept, reported.
+  std::vector<int> folded;
+  if (options.fold_check_samples > 0) folded = folded_quads(f.cage, options.fold_check_samples);
+  bool undo = !folded.empty() && !limit_intersects_itself(initial, options.fold_check_samples);
+  if (undo && options.fold_smoothing_rounds > 0) {
+    Fitting unfolded(f.cage);
+    unfolded.measured = f.measured;
+    std::vector<char> free(f.cage.vertices.rows(), 1);
+    if (options.strategy == FitStrategy::BoundaryTight && has_curves)
+      for (const auto& chain : f.cage.boundary_chains)
+        for (int v : chain) free[v] = 0;
+    run.stiff.assign(f.cage.vertices.rows(), 1.0);
+    int smoothed_points = 0;
+    for (int round = 0; round < options.fold_smoothing_rounds && !folded.empty(); ++round) {
+      // The folded quads' corners and the corners of the quads within fold_rings of them.
+      std::vector<char> ring(f.cage.vertices.rows(), 0);
+      for (int q : folded)
+        for (int k = 0; k < 4; ++k) ring[f.cage.quads(q, k)] = 1;
+      for (int r = 0; r < options.fold_rings; ++r) {
+        const std::vector<char> near = ring;
+        for (Eigen::Index q = 0; q < f.cage.quads.rows(); ++q) {
+          bool touches = false;
+          for (int k = 0; k < 4; ++k) touches |= near[f.cage.quads(q, k)] != 0;
+          if (touches)
+            for (int k = 0; k < 4; ++k) ring[f.cage.quads(q, k)] = 1;
+        }
+      }
+      for (size_t v = 0; v < ring.size(); ++v) {
+        if (!ring[v]) continue;
+        smoothed_points += run.stiff[v] == 1.0;
+        run.stiff[v] *= options.fold_stiffness;
+      }
+      run.alternate(unfolded, free, true, has_curves && options.strategy != FitStrategy::BoundaryTight);
+      folded = folded_quads(unfolded.cage, options.fold_check_samples);
+    }
+    run.stiff.clear();
+    // Kept only if it stays as near the region as the bound or the initial cage, both ways:
+    // holding a fold smoother must not trade it for a surface that strays.
+    const auto two_sided = [](const Measurement& m) {
+      return std::max(m.max_design_to_limit, m.max_limit_to_design);
+    };
+    Fitting start(initial);
+    start.measured = measure(start.surface, start.chains, problem, options);
+    if (folded.empty() && two_sided(unfolded.measured) <= std::max(delta, two_sided(start.measured))) {
+      undo = false;
+      f = std::move(unfolded);
+      report.bound_held = two_sided(f.measured) <= delta;
+      report.diagnostics.push_back("the fit folded the limit surface; " +
+                                   std::to_string(smoothed_points) +
+                                   " control points around the fold were held smoother and it no longer does");
+    } else if (folded.empty()) {
+      report.diagnostics.push_back("the fit folded the limit surface; held smoother it strays " +
+                                   std::to_string(two_sided(unfolded.measured)) + " from the region");
+    }
+  }
+  if (undo) {
     report.diagnostics.push_back(
         "the fitted limit surface intersects itself and the initial one does not: the initial "
         "cage is kept unfitted");

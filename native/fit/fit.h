@@ -19,7 +19,9 @@
 // Gives: the fitted cage (same topology, or a pure-quad refinement of it for Tight and
 // BoundaryTight) and a FitReport. Strategies, §6.3:
 //   Smooth         min L2: least squares of limit points at the foot-point parameters of
-//                  the region's vertices (area-weighted) and of boundary-curve points
+//                  the region's vertices (area-weighted; points inside its triangles
+//                  instead when it has fewer than points_per_control_point per control
+//                  point) and of boundary-curve points
 //                  (matched to the limit boundary curve), plus a small umbrella fairness
 //                  term on the control points, alternated with re-projection for `rounds`.
 //   Tight          L∞ < δ: Smooth, then wherever the two-sided distance exceeds δ the
@@ -34,7 +36,8 @@
 // Guarantees: the returned cage is pure quad with valid boundary chains; the report's
 // distances are measured, not estimated; numerical failure keeps the last good positions
 // and is reported in diagnostics; a fit whose limit surface intersects itself where the
-// initial cage's does not is undone (the initial cage is returned, report.kept_initial).
+// initial cage's does not is repeated with the control points around the fold held
+// smoother, and undone if it still folds (the initial cage is returned, report.kept_initial).
 // Deterministic (no threads, no unordered iteration).
 // Complexity per round: O(Q·s²) limit evaluations (Q quads, s samples per edge), O(N log)
 // closest-point queries for N region vertices, one sparse LDLᵀ of the control points.
@@ -124,6 +127,10 @@ struct FitOptions {
   // Weight of the boundary-curve term against the area term (1 = the whole boundary
   // weighs as much as the whole area). Dimensionless.
   double boundary_weight = 0.2;
+  // Data points per control point at least: a region with fewer vertices than that is
+  // sampled inside its triangles instead (a cage as dense as the region would otherwise
+  // have quads without data, which the least squares folds).
+  double points_per_control_point = 4;
   // Least-squares solves alternated with re-projection, per cage topology.
   int rounds = 4;
   // Tight/BoundaryTight stop refining when the next split would exceed this many control
@@ -138,9 +145,15 @@ struct FitOptions {
   // Segments per quad edge of the limit tessellation tested for self-intersection: a fit
   // that folds the surface where the initial cage's does not is undone (0: no test).
   int fold_check_samples = 4;
+  // A fit that folds is first repeated with the fairness of the control points around the
+  // folded quads multiplied by fold_stiffness (compounding), at most this many times.
+  int fold_smoothing_rounds = 3;
+  double fold_stiffness = 30;
+  int fold_rings = 2;  // quad rings around the folded quads whose corners are held smoother
 };
 
-// Measured, not estimated. "design → limit": each region vertex to its foot point on the
+// Measured, not estimated. "design → limit": each data point (region vertex, or triangle
+// sample for a coarse region) to its foot point on the
 // limit surface; "limit → design": limit samples (measure_samples per quad edge) to the
 // closest point of the region's triangles. Boundary: chain limit curves vs boundary_curves.
 struct FitReport {

@@ -238,8 +238,8 @@ INSTANTIATE_TEST_SUITE_P(DISABLED_KnownFailures, ComposeFixtures, ::testing::Val
 // The whole pipeline as scripts/blender_convert.py runs it on the .blend: grid incidence
 // with the voxel grid make_fixtures.py records on the design (origin GRID_OFFSET · h,
 // GRID_OFFSET = (0.37, 0.29, 0.41)), relaxation, cages where quad/fit succeed and the
-// stand-in where they do not. "boss": its component has no cage and composes from the
-// stand-in; the keep-out bolt fills the keep-in boss's bore, their faces 1e-16 apart.
+// stand-in where they do not. "boss": the keep-out bolt fills the keep-in boss's bore,
+// their faces 1e-16 apart.
 struct FixtureGrid {
   const char* name;
   double h;
@@ -269,6 +269,11 @@ TEST_P(ComposeFixturePipelines, ComposedSolidIsWatertightAndRespectsTheSolids) {
   std::string surfaces;
   for (const auto& contact : r.composed.contacts) surfaces += " " + contact.surface;
   std::printf("[compose] %-20s surfaces:%s\n", r.name.c_str(), surfaces.c_str());
+  // Every component composes from its fitted cage: none falls back to its design region,
+  // and no fit was undone (lattice's first fit folds; the fold is smoothed away).
+  for (const auto& contact : r.composed.contacts) EXPECT_EQ(contact.surface, "cage") << r.name;
+  for (const auto& fitted : result.fitted)
+    EXPECT_FALSE(fitted.report.kept_initial) << r.name << joined(fitted.report.diagnostics);
 }
 
 INSTANTIATE_TEST_SUITE_P(Fixtures, ComposeFixturePipelines,

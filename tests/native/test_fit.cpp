@@ -540,20 +540,27 @@ bool limit_folds(const QuadCage& cage) {
 
 // A fit must not fold the surface: the tube's region with its +x half moved 1.5 towards
 // −x, through the other half, pulls the cage's +x side through its −x side. The plain
-// fit's limit surface then intersects itself; with the check (the default) the initial
+// fit's limit surface then intersects itself; with the check and no smoothing the initial
 // cage is kept, unchanged, and the report says so.
-TEST(Fit, AFitThatFoldsTheSurfaceIsUndone) {
+Fixture folding_tube() {
   Fixture f = tube_fixture(0.05, 0.8, 16, 4);
   for (Eigen::Index i = 0; i < f.region.vertices.rows(); ++i)
     if (f.region.vertices(i, 0) > 0) f.region.vertices(i, 0) -= 1.5;
   f.curves.clear();
+  return f;
+}
+
+TEST(Fit, AFitThatFoldsTheSurfaceIsUndone) {
+  const Fixture f = folding_tube();
   ASSERT_FALSE(limit_folds(f.cage));
   FitOptions options;
   options.fold_check_samples = 0;
   const Fitted plain = fit_cage(f.cage, f.region, f.curves, options, Context());
   EXPECT_FALSE(plain.report.kept_initial);
   EXPECT_TRUE(limit_folds(plain.cage));
-  const Fitted checked = fit_cage(f.cage, f.region, f.curves, FitOptions(), Context());
+  FitOptions undo;
+  undo.fold_smoothing_rounds = 0;
+  const Fitted checked = fit_cage(f.cage, f.region, f.curves, undo, Context());
   print("folded tube", f, checked.report);
   EXPECT_TRUE(checked.report.kept_initial);
   EXPECT_FALSE(limit_folds(checked.cage));
@@ -562,6 +569,47 @@ TEST(Fit, AFitThatFoldsTheSurfaceIsUndone) {
   bool reported = false;
   for (const auto& d : checked.report.diagnostics) reported |= d.find("kept unfitted") != std::string::npos;
   EXPECT_TRUE(reported);
+}
+
+// With fold smoothing (the default) the same fit is repeated with the control points
+// around the folded quads held smoother. On this region (half of it pushed through the
+// other half) the unfolded surface strays far from the region, so it is not kept either:
+// the initial cage comes back, and the report says why.
+TEST(Fit, AFoldSmoothedIntoASurfaceThatStraysIsUndoneToo) {
+  const Fixture f = folding_tube();
+  const Fitted checked = fit_cage(f.cage, f.region, f.curves, FitOptions(), Context());
+  print("fold smoothed", f, checked.report);
+  EXPECT_TRUE(checked.report.kept_initial);
+  EXPECT_FALSE(limit_folds(checked.cage));
+  EXPECT_EQ((checked.cage.vertices - f.cage.vertices).norm(), 0.0);
+  bool strays = false;
+  for (const auto& d : checked.report.diagnostics) strays |= d.find("held smoother it strays") != std::string::npos;
+  EXPECT_TRUE(strays);
+}
+
+// A region about as coarse as the cage (368 vertices, 386 control points: a density raised
+// to the design's resolution, as on lattice) leaves quads without data. Fitted to the
+// vertices alone the limit surface strays between them, and with little fairness it folds;
+// sampled inside its triangles (the default, 4 points per control point) it does neither.
+TEST(Fit, ARegionAsCoarseAsTheCageIsSampledInsideItsTriangles) {
+  const Fixture f = sphere_fixture(0.4, 8);
+  ASSERT_LT(f.region.vertices.rows(), f.cage.vertices.rows());
+  for (double fairness : {1e-3, 1e-6}) {
+    FitOptions vertices_only, sampled_options;
+    vertices_only.points_per_control_point = 0;
+    vertices_only.fold_check_samples = 0;
+    vertices_only.fairness_weight = sampled_options.fairness_weight = fairness;
+    const Fitted sparse = fit_cage(f.cage, f.region, f.curves, vertices_only, Context());
+    print("sphere, vertices only", f, sparse.report);
+    const Fitted sampled = fit_cage(f.cage, f.region, f.curves, sampled_options, Context());
+    print("sphere, sampled", f, sampled.report);
+    EXPECT_FALSE(sampled.report.kept_initial);
+    EXPECT_FALSE(limit_folds(sampled.cage));
+    EXPECT_LT(sampled.report.max_limit_to_design, 0.1 * f.h);
+    EXPECT_LT(sampled.report.max_design_to_limit, 0.1 * f.h);
+    EXPECT_LT(sampled.report.max_limit_to_design, 0.25 * sparse.report.max_limit_to_design);
+    if (fairness < 1e-4) EXPECT_TRUE(limit_folds(sparse.cage));
+  }
 }
 
 TEST(Fit, Deterministic) {
