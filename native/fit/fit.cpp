@@ -261,11 +261,13 @@ struct Run {
 
   // Alternates solves over the `free` control points with re-projection; `use_points`
   // and `use_curves` choose the data terms. Leaves f.measured up to date.
-  void alternate(Fitting& f, const std::vector<char>& free, bool use_points, bool use_curves) {
+  void alternate(Fitting& f, const std::vector<char>& free, bool use_points, bool use_curves,
+                 int rounds = 0) {
+    if (rounds <= 0) rounds = options.rounds;
     const Sparse fairness = fairness_matrix(
         f.cage, free, options.fairness_weight,
         stiff.size() == static_cast<size_t>(f.cage.vertices.rows()) ? stiff : std::vector<double>());
-    for (int round = 0; round < options.rounds; ++round) {
+    for (int round = 0; round < rounds; ++round) {
       ctx.step("fit", std::min(1.0, 0.1 * report.rounds));
       Rows rows;
       if (use_points) {
@@ -471,7 +473,8 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
         smoothed_points += run.stiff[v] == 1.0;
         run.stiff[v] *= options.fold_stiffness;
       }
-      run.alternate(unfolded, free, true, has_curves && options.strategy != FitStrategy::BoundaryTight);
+      run.alternate(unfolded, free, true, has_curves && options.strategy != FitStrategy::BoundaryTight,
+                    options.fold_smoothing_solves);
       folded = folded_quads(unfolded.cage, options.fold_check_samples);
     }
     run.stiff.clear();

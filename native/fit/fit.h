@@ -150,6 +150,7 @@ struct FitOptions {
   int fold_smoothing_rounds = 3;
   double fold_stiffness = 30;
   int fold_rings = 2;  // quad rings around the folded quads whose corners are held smoother
+  int fold_smoothing_solves = 2;  // least-squares solves (with re-projection) per round
 };
 
 // Measured, not estimated. "design → limit": each data point (region vertex, or triangle
