@@ -269,6 +269,17 @@ TEST_P(ComposeFixturePipelines, ComposedSolidIsWatertightAndRespectsTheSolids) {
   std::string surfaces;
   for (const auto& contact : r.composed.contacts) surfaces += " " + contact.surface;
   std::printf("[compose] %-20s surfaces:%s\n", r.name.c_str(), surfaces.c_str());
+  // Issue 5's targets on every cage of the level-set fixtures, each a field-aligned layout.
+  EXPECT_TRUE(result.quads.failures.empty()) << r.name;
+  for (size_t c = 0; c < result.quads.stats.size(); ++c) {
+    const QuadStats& s = result.quads.stats[c];
+    EXPECT_FALSE(s.fallback) << r.name << " cage " << c;
+    EXPECT_GE(s.interior_valence4_fraction(), 0.95) << r.name << " cage " << c;
+    EXPECT_GE(s.boundary_valence3_fraction(), 0.90) << r.name << " cage " << c;
+    EXPECT_LE(s.mean_angle_deviation_deg, 12.0) << r.name << " cage " << c;
+    EXPECT_EQ(s.flipped_quads, 0) << r.name << " cage " << c;
+    EXPECT_EQ(s.degenerate_quads, 0) << r.name << " cage " << c;
+  }
   // Every component composes from its fitted cage: none falls back to its design region,
   // and no fit was undone (lattice's first fit folds; the fold is smoothed away).
   for (const auto& contact : r.composed.contacts) EXPECT_EQ(contact.surface, "cage") << r.name;
