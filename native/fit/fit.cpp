@@ -483,9 +483,13 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
     const auto two_sided = [](const Measurement& m) {
       return std::max(m.max_design_to_limit, m.max_limit_to_design);
     };
-    Fitting start(initial);
-    start.measured = measure(start.surface, start.chains, problem, options);
-    if (folded.empty() && two_sided(unfolded.measured) <= std::max(delta, two_sided(start.measured))) {
+    const auto near_enough = [&] {
+      if (two_sided(unfolded.measured) <= delta) return true;
+      Fitting start(initial);  // measured only when the bound alone does not decide
+      start.measured = measure(start.surface, start.chains, problem, options);
+      return two_sided(unfolded.measured) <= two_sided(start.measured);
+    };
+    if (folded.empty() && near_enough()) {
       undo = false;
       f = std::move(unfolded);
       report.bound_held = two_sided(f.measured) <= delta;
