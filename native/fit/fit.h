@@ -139,6 +139,9 @@ struct FitOptions {
   int max_refinements = 8;
   // Segments per quad edge of the tessellation used to start projections.
   int projection_samples = 6;
+  // ... reduced (to no fewer than 3) while the start grid would have more triangles than
+  // this (2 · samples² per quad): only cages of over 2800 quads are affected.
+  double max_projection_triangles = 2e5;
   // Segments per quad edge at which the limit surface is sampled to measure limit →
   // design distances (and per boundary edge for the boundary curve).
   int measure_samples = 4;

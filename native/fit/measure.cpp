@@ -114,7 +114,13 @@ std::vector<CurveFoot> project_on_chains(const LimitSurface& surface,
 Measurement measure(const LimitSurface& surface, const std::vector<std::vector<ChainEdge>>& chains,
                     const Problem& problem, const FitOptions& options) {
   Measurement m;
-  m.feet = surface.project(problem.points, options.projection_samples);
+  // The projection's start grid is capped (max_projection_triangles), down to 3 segments
+  // per edge: a cage of thousands of quads would otherwise rebuild a tree of 10⁵–10⁶
+  // triangles every round only to seed the Gauss–Newton steps.
+  int samples = std::max(1, options.projection_samples);
+  const double quads = surface.quad_count();
+  while (samples > 3 && 2.0 * samples * samples * quads > options.max_projection_triangles) --samples;
+  m.feet = surface.project(problem.points, samples);
   double sum = 0;
   for (const FootPoint& f : m.feet) {
     sum += f.distance * f.distance;
