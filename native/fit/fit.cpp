@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <set>
 
 #include "fit/detail/problem.h"
@@ -243,6 +244,9 @@ Problem make_problem(const TriangleMesh& region, const std::vector<std::vector<V
 }
 
 // State of one cage topology during the fit.
+// The larger of the two one-sided maxima: what the bound δ is checked against.
+double two_sided(const Measurement& m) { return std::max(m.max_design_to_limit, m.max_limit_to_design); }
+
 struct Fitting {
   QuadCage cage;
   LimitSurface surface;
@@ -357,9 +361,7 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
   Fitting f(initial);
   f.measured = measure(f.surface, f.chains, problem, options);
   const std::vector<char> all(f.cage.vertices.rows(), 1);
-  auto surface_max = [&] {
-    return std::max(f.measured.max_design_to_limit, f.measured.max_limit_to_design);
-  };
+  auto surface_max = [&] { return two_sided(f.measured); };
   auto refine = [&](const std::vector<std::array<int, 2>>& seeds) {
     if (report.refinements >= options.max_refinements) {
       report.diagnostics.push_back("stopped refining after max_refinements = " +
@@ -442,6 +444,15 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
   // pulls opposite sides through each other), the control points around the folded quads
   // are held smoother and the fit repeated (fold_smoothing_rounds, fairness ×
   // fold_stiffness each round); if it still folds, the initial cage is kept, reported.
+  // The initial cage with its distances, measured only when needed, at most once.
+  std::optional<Fitting> initial_fitting;
+  auto measured_initial = [&]() -> Fitting& {
+    if (!initial_fitting) {
+      initial_fitting.emplace(initial);
+      initial_fitting->measured = measure(initial_fitting->surface, initial_fitting->chains, problem, options);
+    }
+    return *initial_fitting;
+  };
   std::vector<int> folded;
   if (options.fold_check_samples > 0) folded = folded_quads(f.cage, options.fold_check_samples);
   bool undo = !folded.empty() && !limit_intersects_itself(initial, options.fold_check_samples);
@@ -480,14 +491,9 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
     run.stiff.clear();
     // Kept only if it stays as near the region as the bound or the initial cage, both ways:
     // holding a fold smoother must not trade it for a surface that strays.
-    const auto two_sided = [](const Measurement& m) {
-      return std::max(m.max_design_to_limit, m.max_limit_to_design);
-    };
     const auto near_enough = [&] {
       if (two_sided(unfolded.measured) <= delta) return true;
-      Fitting start(initial);  // measured only when the bound alone does not decide
-      start.measured = measure(start.surface, start.chains, problem, options);
-      return two_sided(unfolded.measured) <= two_sided(start.measured);
+      return two_sided(unfolded.measured) <= two_sided(measured_initial().measured);
     };
     if (folded.empty() && near_enough()) {
       undo = false;
@@ -505,10 +511,9 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
     report.diagnostics.push_back(
         "the fitted limit surface intersects itself and the initial one does not: the initial "
         "cage is kept unfitted");
-    f = Fitting(initial);
-    f.measured = measure(f.surface, f.chains, problem, options);
+    f = std::move(measured_initial());
     report.refinements = 0;
-    report.bound_held = std::max(f.measured.max_design_to_limit, f.measured.max_limit_to_design) <= delta;
+    report.bound_held = two_sided(f.measured) <= delta;
     report.kept_initial = true;
   }
 
