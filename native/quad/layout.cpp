@@ -311,9 +311,22 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                                    s.vertex_normal[v]);
           corner.quarters = std::clamp(int(std::lround(corner.angle / (kPi / 2))), 1, 3);
           if (h_out == (h_in ^ 1)) corner.quarters = 4;  // a dangling end: full turn
-          auto o = quarter_override.find(h_out);
-          if (o != quarter_override.end()) corner.quarters = o->second;
           cycle.nodes.push_back(corner);
+        }
+        // A jog: a link arc (trace.cpp) whose end turns cancel (a reflex and a quarter turn)
+        // is a step in a straight side; both ends read straight.
+        const int m = static_cast<int>(cycle.nodes.size());
+        for (int i = 0; i < m && m > 1; ++i) {
+          Corner& a = cycle.nodes[i];
+          Corner& b = cycle.nodes[(i + 1) % m];
+          const int arc = out.halfedge_arc[a.halfedge_out] / 2;
+          if (layout.curves[out.arcs[arc].curve].link && a.quarters + b.quarters == 4 &&
+              a.quarters != 2)
+            a.quarters = b.quarters = 2;
+        }
+        for (Corner& k : cycle.nodes) {
+          auto o = quarter_override.find(k.halfedge_out);
+          if (o != quarter_override.end()) k.quarters = o->second;
         }
         cycles.push_back(cycle);
       }
@@ -408,6 +421,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       // Valid: split the cycle into four sides at its corners.
       Patch patch;
       patch.faces = patch_faces[p];
+      for (int f : patch.faces) patch.quads += s.face_quads(f);
       std::vector<int> corner_at;
       const int n = static_cast<int>(cycle.halfedges.size());
       std::vector<int> quarters(n, 2);

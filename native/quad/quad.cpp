@@ -370,14 +370,8 @@ double density_raise(const quad_detail::Surface& s, const QuadOptions& options) 
   for (const Singularity& sing : s.field.singularities)
     if (sing.component == s.component && !sing.on_boundary) quarters += std::abs(sing.index);
   double quads = 0;
-  for (auto f : s.mesh.faces()) {
-    if (!s.in(f.idx())) continue;
-    Vec3 corner[3];
-    int k = 0;
-    for (auto v : s.mesh.fv_range(f)) corner[k++] = s.point[v.idx()];
-    const double area = 0.5 * (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
-    quads += area / (s.field.size_u[f.idx()] * s.field.size_v[f.idx()]);
-  }
+  for (auto f : s.mesh.faces())
+    if (s.in(f.idx())) quads += s.face_quads(f.idx());
   quads *= options.density * options.density;
   const double wanted = options.vertices_per_singular_quarter * quarters;
   return quads > 0 && quads < wanted ? std::sqrt(wanted / quads) : 1.0;
@@ -413,6 +407,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   std::vector<Variant> variants;
   const std::pair<const char*, std::function<void(QuadOptions&)>> layouts[] = {
       {"", [](QuadOptions&) {}},
+      {"separatrices joined to nearly parallel curves",
+       [](QuadOptions& o) { o.join_parallel = !o.join_parallel; }},
       {"separatrices crossing", [](QuadOptions& o) { o.cross_separatrices = !o.cross_separatrices; }},
       {"singularity pairs within 2x the cancel distance cancelled",
        [](QuadOptions& o) { o.pair_cancel_distance *= 2; }},
@@ -469,6 +465,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   int best = -1;
   QuadCage best_cage;
   QuadStats best_stats;
+  std::optional<QuadStats> requested_stats;  // the requested layout's cage, if it was valid
   Diagnostics best_diagnostics;
   // Once a cage meets the targets, more choices are tried only within a work budget:
   // choices × the (refined) component's triangles (QuadOptions::work_after_meeting).
@@ -491,6 +488,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       if (k == 0) requested_failure = e.what();
       continue;
     }
+    if (k == 0) requested_stats = stats;
     // Collapsed quads mean the layout itself was broken there: such a cage is kept only
     // if it meets the targets (else the fallback is the better cage).
     if (stats.collapsed_quads && !meets_targets(stats)) {
@@ -514,13 +512,24 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   }
   if (best >= 0) {
     out->diagnostics.insert(out->diagnostics.end(), best_diagnostics.begin(), best_diagnostics.end());
-    if (best > 0)
-      out->diagnostics.push_back("component " + std::to_string(c) + ": the cage uses the layout with " +
-                                 variants[best].what + " (" +
-                                 (requested_failure.empty()
-                                      ? std::string("the requested one missed the targets")
-                                      : "the requested one failed: " + requested_failure) +
-                                 ")");
+    if (best > 0) {
+      std::string why = "the requested one failed: " + requested_failure;
+      if (requested_stats && !meets_targets(*requested_stats)) {
+        why = "the requested one missed the targets";
+      } else if (requested_stats) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "%d irregular vertices, %.1f° mean corner deviation, %d collapsed quads; "
+                      "the requested one: %d, %.1f°, %d",
+                      best_stats.irregular_vertices, best_stats.mean_angle_deviation_deg,
+                      best_stats.collapsed_quads, requested_stats->irregular_vertices,
+                      requested_stats->mean_angle_deviation_deg, requested_stats->collapsed_quads);
+        why = text;
+      }
+      out->diagnostics.push_back("component " + std::to_string(c) +
+                                 ": the cage uses the layout with " + variants[best].what +
+                                 " (" + why + ")");
+    }
     out->cages.push_back(std::move(best_cage));
     out->stats.push_back(best_stats);
     return;

@@ -66,6 +66,14 @@ struct QuadOptions {
   // Let separatrices pass transversally through earlier ones (fewer T-junctions, but
   // edge-snapped crossings leave sliver patches on level-set meshes: off by default).
   bool cross_separatrices = false;
+  // Join parallel curves: a separatrix that comes closer than join_parallel_distance cage
+  // edges to an earlier, nearly parallel curve joins it there across a short link curve
+  // (trace.cpp), instead of converging onto it at a shallow angle further on (a wedge
+  // patch that quantization can only balance by squeezing its long side). One of the
+  // layout choices (extract_component); off in the requested layout because on clean
+  // fields it only adds jogs.
+  bool join_parallel = false;
+  double join_parallel_distance = 0.3;
   // Patches whose angles do not give four corners: choose the four nodes that best make a
   // rectangle (angles and opposite side lengths), or re-read one angle at a time (false).
   bool fit_corners = true;

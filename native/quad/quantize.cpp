@@ -111,6 +111,31 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
     for (auto& [a, c] : rows[r].coefficients)
       ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
   }
+  // A patch at least one cage edge wide across a pair of sides should keep a row of quads
+  // there even when those sides are short arcs (their targets say nothing about the
+  // patch's width in between): Σ(side) + s ≥ 1, the slack s ∈ [0, 1] priced at the
+  // patch's width w = quads / length (the cost of an arc of target w at 0 edges).
+  for (const Patch& patch : layout.patches)
+    for (int pair = 0; pair < 2; ++pair) {
+      double across = 0, along = 0;
+      for (int side : {pair, pair + 2})
+        for (auto& [a, reversed] : patch.sides[side]) across += layout.arcs[a].target;
+      for (int side : {1 - pair, 3 - pair})
+        for (auto& [a, reversed] : patch.sides[side]) along += layout.arcs[a].target;
+      across *= 0.5 * options.density;
+      along *= 0.5 * options.density;
+      const double width = patch.quads * options.density * options.density / std::max(along, 1.0);
+      if (width < 1 || across >= 1) continue;
+      const int row = glp_add_rows(lp, 1);
+      glp_set_row_bnds(lp, row, GLP_LO, 1, 0);
+      std::map<int, int> coefficient;
+      for (auto& [a, reversed] : patch.sides[pair]) ++coefficient[a];
+      for (auto& [a, c] : coefficient) ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
+      const int slack = glp_add_cols(lp, 1);
+      glp_set_col_bnds(lp, slack, GLP_DB, 0, 1);
+      glp_set_obj_coef(lp, slack, width);
+      ia.push_back(row), ja.push_back(slack), ar.push_back(1.0);
+    }
   glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
   glp_iocp parameters;
   glp_init_iocp(&parameters);

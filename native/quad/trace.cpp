@@ -79,6 +79,14 @@ Vec3 Surface::tangent(int v, const Vec3& d) const {
   return t.norm() > 1e-12 ? t.normalized() : d.normalized();
 }
 
+double Surface::face_quads(int f) const {
+  Vec3 corner[3];
+  int k = 0;
+  for (auto v : mesh.fv_range(mesh.face_handle(f))) corner[k++] = point[v.idx()];
+  const double area = 0.5 * (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
+  return area / (field.size_u[f] * field.size_v[f]);
+}
+
 void register_curve(const Surface& s, Layout& layout, int c) {
   const Curve& curve = layout.curves[c];
   const int n = static_cast<int>(curve.vertices.size());
@@ -116,6 +124,7 @@ void remove_arc(const Surface& s, Layout& layout, int c, int first, int last) {
     Curve tail;
     tail.vertices.assign(curve.vertices.begin() + last, curve.vertices.end());
     tail.direction.assign(curve.direction.begin() + last, curve.direction.end());
+    tail.link = curve.link;
     layout.curves.push_back(tail);
     register_curve(s, layout, static_cast<int>(layout.curves.size()) - 1);
   }
@@ -259,8 +268,53 @@ Vec3 sector_direction(const Surface& s, const Sector& sector, int vertex, double
   return s.tangent(vertex, std::cos(a) * e + std::sin(a) * s.face_normal[f].cross(e));
 }
 
-// Walks from `vertex` along d (first step restricted to `allowed` outgoing halfedges)
-// until it reaches a claimed vertex; registers the curve.
+// Where a trace running beside an earlier curve should join it: the claimed vertex u
+// within `radius` of w (two rings) that lies across d from w (|cos| ≤ 0.6), on a curve
+// nearly parallel to d (|cos| > 0.7), not on the trace itself and not within 3 radii of
+// its start (where the field turns round the trace's own singularity, its other
+// separatrices look parallel), reached from w by the shortest path of at most two free
+// edges: [w, (x,) u]. Empty when there is none.
+std::vector<int> parallel_join(const Surface& s, const Layout& layout, int w, const Vec3& d,
+                               double radius, const std::vector<int>& visited) {
+  auto on_trace = [&](int u) { return std::find(visited.begin(), visited.end(), u) != visited.end(); };
+  auto free_edge = [&](int a, int b) {
+    const auto h = s.mesh.find_halfedge(s.mesh.vertex_handle(a), s.mesh.vertex_handle(b));
+    return h.is_valid() && layout.edge_curve[s.mesh.edge_handle(h).idx()] < 0 &&
+           (s.in(s.face(h.idx())) || s.in(s.face(h.idx() ^ 1)));
+  };
+  auto parallel_at = [&](int u) {
+    for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(u)))
+      if (layout.edge_curve[oh.idx() >> 1] >= 0 && std::abs(layout.halfedge_dir[oh.idx()].dot(d)) > 0.7)
+        return true;
+    return false;
+  };
+  std::vector<int> ring{w};
+  for (auto vv : s.mesh.vv_range(s.mesh.vertex_handle(w))) ring.push_back(vv.idx());
+  const size_t first_ring = ring.size();
+  for (size_t k = 1; k < first_ring; ++k)
+    for (auto vv : s.mesh.vv_range(s.mesh.vertex_handle(ring[k])))
+      if (std::find(ring.begin(), ring.end(), vv.idx()) == ring.end()) ring.push_back(vv.idx());
+  std::vector<int> best;
+  double best_length = 1e300;
+  for (size_t k = 1; k < ring.size(); ++k) {
+    const int u = ring[k];
+    if (!layout.claimed[u] || on_trace(u)) continue;
+    const Vec3 e = s.point[u] - s.point[w];
+    if (e.norm() > radius || std::abs(e.dot(d)) > 0.6 * e.norm() || !parallel_at(u)) continue;
+    if ((s.point[u] - s.point[visited.front()]).norm() < 3 * radius) continue;
+    if (free_edge(w, u) && e.norm() < best_length) best_length = e.norm(), best = {w, u};
+    for (auto xv : s.mesh.vv_range(s.mesh.vertex_handle(w))) {
+      const int x = xv.idx();
+      if (layout.claimed[x] || !free_edge(w, x) || !free_edge(x, u)) continue;
+      const double length = (s.point[x] - s.point[w]).norm() + (s.point[u] - s.point[x]).norm();
+      if (length < best_length) best_length = length, best = {w, x, u};
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<int> allowed,
                      Vec3 d, bool snap_to_field) {
   // A first step onto a claimed vertex would enclose a one-triangle patch.
@@ -324,6 +378,33 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
             std::abs(layout.halfedge_dir[oh.idx()].dot(d)) < 0.5)
           cross = true;
     }
+    // Running beside an earlier curve (closer than merge_parallel target edges, nearly
+    // parallel): join it now, across a short connecting curve with a corner at w, rather
+    // than converge onto it at a shallow angle further on (a wedge patch that no reading
+    // of corners makes a rectangle). The strip left between is a sliver patch.
+    if (layout.merge_parallel > 0 && !layout.claimed[w] && !own) {
+      const std::vector<int> join =
+          parallel_join(s, layout, w, d, layout.merge_parallel * s.vertex_size[w], visited);
+      if (!join.empty()) {
+        const int c = static_cast<int>(layout.curves.size());
+        layout.curves.push_back(curve);
+        register_curve(s, layout, c);
+        Curve link;
+        link.link = true;
+        Vec3 across = s.point[join.back()] - s.point[w];
+        across -= d * d.dot(across);
+        for (int u : join) {
+          link.vertices.push_back(u);
+          link.direction.push_back(field_at(s, u, s.tangent(u, across)));
+        }
+        layout.curves.push_back(link);
+        register_curve(s, layout, c + 1);
+        ++layout.separatrices;
+        ++layout.parallel_joins;
+        layout.node[vertex] = layout.node[w] = layout.node[join.back()] = 1;
+        return true;
+      }
+    }
     if ((layout.claimed[w] && !cross) || own) {
       const int c = static_cast<int>(layout.curves.size());
       layout.curves.push_back(curve);
@@ -342,8 +423,6 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
   ++layout.dropped_traces;
   return false;
 }
-
-}  // namespace
 
 bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int last,
                 double fraction, bool snap_to_field) {
@@ -461,6 +540,7 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
   }
   for (int a : layout.attractors) layout.claimed[a] = 1;
   layout.allow_crossing = options.cross_separatrices;
+  layout.merge_parallel = options.join_parallel ? options.join_parallel_distance / options.density : 0;
   int missing = 0;
   for (const auto& round : rounds)
     for (const Start& start : round) {
@@ -474,6 +554,10 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
       missing += !trace_direction(s, layout, start.vertex, start.spokes, start.direction, true);
     }
   layout.allow_crossing = false;
+  layout.merge_parallel = 0;
+  if (layout.parallel_joins)
+    diagnostics.push_back(who + ": " + std::to_string(layout.parallel_joins) +
+                          " separatrices joined an earlier curve they ran beside");
   if (missing)
     diagnostics.push_back(who + ": " + std::to_string(missing) +
                           " separatrices could not leave their singularity");

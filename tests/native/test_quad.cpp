@@ -334,6 +334,122 @@ TEST(Quad, UnbalancedPatchIsNamed) {
   EXPECT_TRUE(quad_detail::unbalanced_patches(layout).empty());
 }
 
+// A patch wider than a cage edge keeps a row of quads even when the arcs across it are
+// short (two separatrices that meet a third at nearby nodes): patch 0 is 10 long and
+// holds 30 quads (3 wide), but its ends are arcs of target 0.2. Patch 1 shares all its
+// arcs (a torus of two patches, no loop) and is thin (2 quads), so only patch 0's width
+// says the ends must not vanish.
+TEST(Quad, AWidePatchBetweenShortArcsKeepsARow) {
+  quad_detail::PatchLayout layout;
+  layout.arcs.resize(4);
+  for (int a : {0, 1}) layout.arcs[a].target = layout.arcs[a].length = 0.2;
+  for (int a : {2, 3}) layout.arcs[a].target = layout.arcs[a].length = 10;
+  quad_detail::Patch wide, thin;
+  wide.sides = {{{0, false}}, {{2, false}}, {{1, true}}, {{3, true}}};
+  thin.sides = {{{1, false}}, {{3, false}}, {{0, true}}, {{2, true}}};
+  wide.quads = 30;
+  thin.quads = 2;
+  layout.patches = {wide, thin};
+  std::string failure;
+  bool relaxed = false;
+  ASSERT_TRUE(quad_detail::quantize(layout, QuadOptions{}, &failure, &relaxed)) << failure;
+  EXPECT_EQ(layout.arcs[0].count, 1);
+  EXPECT_EQ(layout.arcs[1].count, 1);
+  // Both thin: the ends vanish and the strip collapses.
+  layout.patches[0].quads = 2;
+  ASSERT_TRUE(quad_detail::quantize(layout, QuadOptions{}, &failure, &relaxed)) << failure;
+  EXPECT_EQ(layout.arcs[0].count, 0);
+  EXPECT_EQ(layout.arcs[1].count, 0);
+}
+
+// On a flat grid (field along x, target size 1, mesh edges 0.1) with a curve S along
+// y = 2 from x = 0.5 to 3 and a barrier along x = 3: a walk along +x that starts 0.2
+// from S joins S across a link of at most two edges once it is clear of its start; one
+// that starts 0.6 away (beyond the 0.3 join distance) runs on to the barrier, and so does
+// one 0.2 away when joining is off.
+TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
+  const int n = 41;
+  const double h = 0.1;
+  TriangleMesh grid;
+  grid.vertices.resize(n * n, 3);
+  grid.triangles.resize(2 * (n - 1) * (n - 1), 3);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) grid.vertices.row(i * n + j) << j * h, i * h, 0;
+  for (int i = 0, t = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < n; ++j) {
+      const int a = i * n + j;
+      grid.triangles.row(t++) << a, a + 1, a + n + 1;
+      grid.triangles.row(t++) << a, a + n + 1, a + n;
+    }
+  const TriMesh mesh = to_trimesh(grid);
+  const int nf = static_cast<int>(mesh.n_faces());
+  Partition partition;
+  partition.face_component.assign(nf, 0);
+  partition.organic_components = 1;
+  CrossField field;
+  field.direction = FaceVectors(nf, 3);
+  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
+  field.size_u = field.size_v = Eigen::VectorXd::Constant(nf, 1.0);
+  const quad_detail::Surface s(mesh, partition, field, 0);
+  auto vertex = [&](int i, int j) { return i * n + j; };
+  auto straight = [&](std::vector<int> vertices, const Vec3& d) {
+    quad_detail::Curve c;
+    c.vertices = std::move(vertices);
+    c.direction.assign(c.vertices.size(), d);
+    return c;
+  };
+  auto fresh_layout = [&] {
+    quad_detail::Layout layout = quad_detail::start_layout(s, {});
+    std::vector<int> along, barrier;
+    for (int j = 5; j <= 30; ++j) along.push_back(vertex(20, j));
+    for (int i = 0; i < n; ++i) barrier.push_back(vertex(i, 30));
+    layout.curves = {straight(along, Vec3(1, 0, 0)), straight(barrier, Vec3(0, 1, 0))};
+    for (int c : {0, 1}) quad_detail::register_curve(s, layout, c);
+    return layout;
+  };
+  auto spokes = [&](int v) {
+    std::vector<int> out;
+    for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
+    return out;
+  };
+  auto y_of = [&](int v) { return mesh.point(mesh.vertex_handle(v))[1]; };
+  auto x_of = [&](int v) { return mesh.point(mesh.vertex_handle(v))[0]; };
+
+  quad_detail::Layout layout = fresh_layout();
+  layout.merge_parallel = 0.3;
+  const int start = vertex(22, 5);
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes(start), Vec3(1, 0, 0), true));
+  ASSERT_EQ(layout.curves.size(), 4u);
+  EXPECT_EQ(layout.parallel_joins, 1);
+  const quad_detail::Curve& walk = layout.curves[2];
+  const quad_detail::Curve& link = layout.curves[3];
+  EXPECT_FALSE(walk.link);
+  EXPECT_TRUE(link.link);
+  EXPECT_EQ(walk.vertices.front(), start);
+  for (int v : walk.vertices) EXPECT_NEAR(y_of(v), 2.2, 1e-9);  // straight along the field
+  EXPECT_GE(x_of(walk.vertices.back()), 0.5 + 0.9 - 1e-9);        // clear of its start
+  EXPECT_LE(x_of(walk.vertices.back()), 2.0);                     // well before the barrier
+  EXPECT_EQ(link.vertices.front(), walk.vertices.back());
+  EXPECT_LE(link.vertices.size(), 3u);
+  EXPECT_NEAR(y_of(link.vertices.back()), 2.0, 1e-9);  // on S
+  EXPECT_TRUE(layout.node[walk.vertices.back()] && layout.node[link.vertices.back()]);
+  // The link leaves across the field (a quarter turn at the join, not a shallow cusp).
+  EXPECT_LT(std::abs(link.direction.front().dot(Vec3(1, 0, 0))), 0.1);
+
+  const int far = vertex(26, 5);
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, far, spokes(far), Vec3(1, 0, 0), true));
+  EXPECT_EQ(layout.parallel_joins, 1);
+  EXPECT_NEAR(x_of(layout.curves.back().vertices.back()), 3.0, 1e-9);  // on the barrier
+  EXPECT_FALSE(layout.curves.back().link);
+
+  quad_detail::Layout off = fresh_layout();
+  const int below = vertex(18, 5);
+  ASSERT_TRUE(quad_detail::trace_direction(s, off, below, spokes(below), Vec3(1, 0, 0), true));
+  EXPECT_EQ(off.parallel_joins, 0);
+  ASSERT_EQ(off.curves.size(), 3u);
+  EXPECT_NEAR(x_of(off.curves.back().vertices.back()), 3.0, 1e-9);
+}
+
 TEST(Quad, TwoArchesGiveTwoValidCages) {
   const Partitioned r = relaxed(partition_scene(two_arches_scene(0.05)));
   int problems = 0;
@@ -456,6 +572,9 @@ TEST(Quad, DenseSingularitiesRaiseTheDensity) {
                                   Vec3(-1.2, -1.2, -1.2), Vec3(1.2, 1.2, 1.2), 0.06);
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   QuadOptions options;
+  // Both runs on the same layout choices: joining parallel separatrices gives the plain
+  // sphere a denser cage (835 quads against 479), which would blur the comparison.
+  options.join_parallel_distance = 0;
   const QuadResult plain = extract_cages(r.mesh, r.partition, field, options, Context());
   options.vertices_per_singular_quarter = 200;
   const QuadResult raised = extract_cages(r.mesh, r.partition, field, options, Context());

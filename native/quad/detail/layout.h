@@ -56,6 +56,8 @@ struct Surface {
   // Target edge length along direction d on `face` (size_u or size_v, whichever arm d follows).
   double size_along(int face, const Vec3& d) const;
   Vec3 tangent(int vertex, const Vec3& d) const;  // d projected into the vertex tangent plane
+  // Quads the field's sizes put on `face` at density 1: area / (size_u · size_v).
+  double face_quads(int face) const;
 };
 
 // Layout curves: the component's loops first (closed), then traced separatrices (open,
@@ -65,6 +67,7 @@ struct Curve {
   std::vector<Vec3> direction;  // per vertex: unit tangent along the curve
   bool closed = false;
   int loop = -1;                // partition loop index for loops
+  bool link = false;            // a separatrix's short jog onto a parallel curve (trace.cpp)
 };
 
 struct Layout {
@@ -76,6 +79,8 @@ struct Layout {
   std::vector<char> on_loop;         // per vertex: on a boundary loop
   bool allow_crossing = false;      // separatrices (not repair cuts) cross transversally
   double length_cap = 0;             // traces cross others only before this length
+  double merge_parallel = 0;         // join a nearly parallel curve closer than this × size
+  int parallel_joins = 0;
   std::vector<int> attractors;       // traced singular vertices (separatrices end on them)
   int separatrices = 0;
   int cancelled_pairs = 0;
@@ -90,6 +95,14 @@ void register_curve(const Surface& s, Layout& layout, int c);
 // before it stays curve c (empty if nothing), what remains after it becomes a new curve.
 // Vertices of the stretch are released unless another curve or a singularity holds them.
 void remove_arc(const Surface& s, Layout& layout, int c, int first, int last);
+// Walks from `vertex` along d (first step restricted to the `allowed` outgoing halfedges),
+// snapping to the field at every vertex if `snap_to_field`, until it reaches a claimed
+// vertex (motorcycle graph), and registers the curve; false (nothing registered) if it
+// cannot leave or finds no end. With layout.merge_parallel > 0 a walk that comes that
+// close (× the local target size) to an earlier, nearly parallel curve ends there and a
+// link curve (Curve::link) of at most two edges joins it to that curve.
+bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<int> allowed,
+                     Vec3 d, bool snap_to_field);
 // Traces from `vertex` into the sector from outgoing halfedge `first` counter-clockwise to
 // `last` (first == last: the whole fan), towards polar angle `fraction` of the sector,
 // snapped to the nearest field direction. Returns false (and traces nothing) when no edge
@@ -112,6 +125,7 @@ struct Patch {
   std::vector<int> faces;
   // Four sides counter-clockwise (patch on the left); each a list of (arc, reversed).
   std::vector<std::vector<std::pair<int, bool>>> sides;
+  double quads = 0;  // Σ area / (size_u · size_v) over its faces: the quads it holds at density 1
 };
 
 struct PatchLayout {
