@@ -408,11 +408,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   std::vector<Variant> variants;
   const std::pair<const char*, std::function<void(QuadOptions&)>> layouts[] = {
       {"", [](QuadOptions&) {}},
+      {"singularity pairs within 2x the cancel distance cancelled",
+       [](QuadOptions& o) { o.pair_cancel_distance *= 2; }},
       {"separatrices joined to nearly parallel curves",
        [](QuadOptions& o) { o.join_parallel = !o.join_parallel; }},
       {"separatrices crossing", [](QuadOptions& o) { o.cross_separatrices = !o.cross_separatrices; }},
-      {"singularity pairs within 2x the cancel distance cancelled",
-       [](QuadOptions& o) { o.pair_cancel_distance *= 2; }},
       {"singularities within 2x the absorb distance left to the boundary",
        [](QuadOptions& o) { o.boundary_absorb_distance *= 2; }},
       {"both distances doubled",
@@ -421,7 +421,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
          o.pair_cancel_distance *= 2, o.boundary_absorb_distance *= 2;
          o.cross_separatrices = !o.cross_separatrices;
        }}};
-  // Merging unbalanced patches is tried only after every choice without it.
+  // Merging unbalanced patches is tried only after every choice without it (but joins).
   for (bool balance : {false, true})
     for (const auto& [what, change] : layouts)
       for (bool flip_corners : {false, true}) {
@@ -433,10 +433,14 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
           name += name.empty() ? "" : ", ";
           name += o.fit_corners ? "corners fitted as rectangles" : "corners re-read one at a time";
         }
+        // Joins leave layouts that often balance only once a join is taken back (merging
+        // an unbalanced patch drops its shortest arc, the link): they are tried with
+        // merging in the first pass already, and not again.
+        if (o.join_parallel && balance) continue;
         if (balance) {
           name += name.empty() ? "" : ", ";
           name += "unbalanced patches merged";
-        } else {
+        } else if (!o.join_parallel) {
           o.max_balance_rounds = 0;
         }
         variants.push_back({name, o});
@@ -469,21 +473,25 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   std::optional<QuadStats> requested_stats;  // the requested layout's cage, if it was valid
   Diagnostics best_diagnostics;
   // Once a cage meets the targets, more choices are tried only within a work budget:
-  // choices × the (refined) component's triangles (QuadOptions::work_after_meeting).
-  int first_meeting = -1;
+  // choices × the (refined) component's triangles (QuadOptions::work_after_meeting),
+  // counting only choices that traced a new layout (a repeated one stops after tracing).
+  int first_meeting = -1, tried_after_meeting = 0;
   int triangles = 0;
   for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
   const int choices_after_meeting =
       static_cast<int>(options.work_after_meeting / std::max(1, triangles));
   for (size_t k = 0; k < variants.size(); ++k) {
-    if (first_meeting >= 0 && static_cast<int>(k) > first_meeting + choices_after_meeting) break;
+    if (first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) break;
     QuadCage cage;
     QuadStats stats;
     Diagnostics diagnostics;
+    const std::size_t layouts_seen = seen_layouts.size();
     try {
       extract_once(surface, checks, variants[k].options, &seen_layouts, &cage, &stats,
                    &diagnostics);
+      tried_after_meeting += first_meeting >= 0;
     } catch (const Error& e) {
+      tried_after_meeting += first_meeting >= 0 && seen_layouts.size() > layouts_seen;
       if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
       if (first_failure.empty()) first_failure = e.what();
       if (k == 0) requested_failure = e.what();

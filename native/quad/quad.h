@@ -83,8 +83,9 @@ struct QuadOptions {
   int max_balance_rounds = 8;
   // After the first layout choice whose cage meets issue 5's targets, further choices are
   // tried (the best cage is kept) as long as choices × the component's triangles (after
-  // refinement) stays within this; the search stops at once when a cage meets the targets
-  // with a margin. 6e5: all choices on components of ≤ 25k triangles, 3 on lattice's 190k.
+  // refinement) stays within this, counting only choices that traced a layout not seen
+  // before; the search stops at once when a cage meets the targets with a margin. 6e5: all
+  // choices on components of ≤ 25k triangles, 3 on lattice's 190k.
   double work_after_meeting = 6e5;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
   double density = 1.0;
