@@ -162,6 +162,8 @@ QuadResult extract_cages(const TriMesh& design, const Partition& partition,
 
 namespace {
 
+bool cage_is_manifold(const QuadCage& cage, std::string* why);
+
 // Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
 // reported. A valid cage is then evened out (relax_cage: 10 sweeps, half steps), kept if
 // it stays valid and its corners come closer to 90°.
@@ -185,6 +187,26 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
                            " left");
   }
   if (stats.flipped_quads || stats.degenerate_quads) return stats;
+  // Irregular vertices the layout left in ± pairs (collapsed slivers, merged nodes) are
+  // cancelled by diagonal collapses where a quad allows it; kept if the cage stays valid.
+  QuadCage cancelled = *cage;
+  if (const int pairs = quad_detail::cancel_irregular_pairs(checks, cancelled, 4)) {
+    const QuadStats cancelled_stats = quad_detail::measure_cage(cancelled, checks.normals);
+    std::string why;
+    if (!cancelled_stats.flipped_quads && !cancelled_stats.degenerate_quads &&
+        cancelled_stats.irregular_vertices < stats.irregular_vertices &&
+        cage_is_manifold(cancelled, &why)) {
+      diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
+                             std::to_string(pairs) +
+                             " quads collapsed along a diagonal to cancel irregular vertices "
+                             "in pairs (" + std::to_string(stats.irregular_vertices) + " → " +
+                             std::to_string(cancelled_stats.irregular_vertices) + ")");
+      const int folded = stats.collapsed_quads;
+      *cage = std::move(cancelled);
+      stats = cancelled_stats;
+      stats.collapsed_quads = folded;
+    }
+  }
   QuadCage relaxed = *cage;
   quad_detail::relax_cage(checks, relaxed, 10, 0.5);
   QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks.normals);

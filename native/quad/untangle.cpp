@@ -248,16 +248,19 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
 }
 
 int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
-                       const std::vector<int>& bad) {
+                       const std::vector<int>& bad, const std::vector<int>& diagonal,
+                       std::vector<int>* done) {
   CageEdit edit(cage);
   const auto& fixed = edit.incidence.on_chain;
   const auto& quads_of = edit.incidence.quads_of;
   auto& touched = edit.touched;
   int collapsed = 0;
-  for (int q : bad) {
+  for (size_t i = 0; i < bad.size(); ++i) {
+    const int q = bad[i];
     int best_k = -1;
     double best_length = 1e300;
     for (int k = 0; k < 2; ++k) {
+      if (!diagonal.empty() && diagonal[i] != k) continue;
       const int a = cage.quads(q, k), c = cage.quads(q, k + 2);
       if ((fixed[a] && fixed[c]) || touched[a] || touched[c]) continue;
       bool shared = false;  // another quad holding both ends
@@ -294,10 +297,100 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
     }  // else the interior end merges into the chain vertex, which stays on its loop
     edit.merged_into[c] = a;
     edit.removed[q] = 1;
+    if (done) done->push_back(q);
     ++collapsed;
   }
   if (collapsed) edit.apply(cage);
   return collapsed;
+}
+
+namespace {
+
+// One round of cancel_irregular_pairs on the candidates of the cage as it is.
+int cancel_pairs_once(const CageChecks& checks, QuadCage& cage, int max_attempts) {
+  const QuadCage original = cage;
+  const CageIncidence incidence(original);
+  const auto& fixed = incidence.on_chain;
+  auto valence = [&](int v) { return static_cast<int>(incidence.quads_of[v].size()); };
+  struct Candidate { int gain, quad, k; };
+  std::vector<Candidate> candidates;
+  for (int q = 0; q < original.quads.rows(); ++q) {
+    int c[4];
+    bool interior = true;
+    for (int k = 0; k < 4; ++k) c[k] = original.quads(q, k), interior &= !fixed[c[k]];
+    if (!interior) continue;
+    int before = 0;
+    for (int v : c) before += valence(v) != 4;
+    for (int k = 0; k < 2; ++k) {
+      const int merged = valence(c[k]) + valence(c[k + 2]) - 2;
+      const int b = valence(c[k + 1]) - 1, d = valence(c[(k + 3) % 4]) - 1;
+      if (merged > 5 || b < 3 || d < 3) continue;
+      const int gain = before - ((merged != 4) + (b != 4) + (d != 4));
+      if (gain > 0) candidates.push_back({gain, q, k});
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& x, const Candidate& y) { return x.gain > y.gain; });
+  auto centroid = [](const QuadCage& c, int q) {
+    Vec3 m = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) m += 0.25 * c.vertices.row(c.quads(q, k)).transpose();
+    return m;
+  };
+  // A collapse whose neighbourhood cannot be opened again is left out and the rest are
+  // tried again from the original cage.
+  std::vector<char> excluded(original.quads.rows(), 0);
+  std::vector<int> squeezed_before;  // quads already under the 5° bar (above measure's 1°)
+  {
+    QuadCage copy = original;
+    smooth_cage(checks.locator, checks.normals, copy, 0, kMinCornerDegrees, &squeezed_before);
+  }
+  for (int attempt = 0; attempt < max_attempts; ++attempt) {
+    cage = original;
+    std::vector<int> quads, diagonals, done;
+    for (const Candidate& c : candidates)
+      if (!excluded[c.quad]) quads.push_back(c.quad), diagonals.push_back(c.k);
+    if (quads.empty() ||
+        !collapse_diagonals(checks.locator, cage, quads, diagonals, &done))
+      break;
+    // The merged vertices sit at diagonal midpoints; the caller evens the cage out
+    // (relax_cage). Smoothing here, as after an untangling collapse, would open thin quads
+    // elsewhere too and can turn others over, so it is only the second try.
+    std::vector<int> strict;
+    smooth_cage(checks.locator, checks.normals, cage, 0, kMinCornerDegrees, &strict);
+    if (strict.size() > squeezed_before.size()) {
+      const QuadCage collapsed = cage;
+      std::vector<int> thin;
+      smooth_cage(checks.locator, checks.normals, cage, 24, kMinCornerDegrees, &thin);
+      strict.clear();
+      smooth_cage(checks.locator, checks.normals, cage, 0, kMinCornerDegrees, &strict);
+      if (strict.size() > squeezed_before.size()) cage = collapsed;
+    }
+    if (strict.size() <= squeezed_before.size()) return static_cast<int>(done.size());
+    for (int q : strict) {
+      const Vec3 at = centroid(cage, q);
+      int nearest = -1;
+      double best = 1e300;
+      for (int d : done) {
+        const double distance = (centroid(original, d) - at).norm();
+        if (distance < best) best = distance, nearest = d;
+      }
+      if (nearest >= 0) excluded[nearest] = 1;
+    }
+  }
+  cage = original;
+  return 0;
+}
+
+}  // namespace
+
+int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds) {
+  int total = 0;
+  for (int round = 0; round < max_rounds; ++round) {
+    const int now = cancel_pairs_once(checks, cage, 4);
+    if (!now) break;
+    total += now;
+  }
+  return total;
 }
 
 int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed) {

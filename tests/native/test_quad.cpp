@@ -178,6 +178,50 @@ void expect_targets(const std::string& name, const QuadStats& s) {
   EXPECT_EQ(s.degenerate_quads, 0) << name;
 }
 
+// A flat n × n vertex grid of spacing h in the xy plane, one organic component with no
+// loops, the field along x with target size 1.
+struct FlatGrid {
+  FlatGrid(int n, double h) {
+    TriangleMesh grid;
+    grid.vertices.resize(n * n, 3);
+    grid.triangles.resize(2 * (n - 1) * (n - 1), 3);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) grid.vertices.row(i * n + j) << j * h, i * h, 0;
+    for (int i = 0, t = 0; i + 1 < n; ++i)
+      for (int j = 0; j + 1 < n; ++j) {
+        const int a = i * n + j;
+        grid.triangles.row(t++) << a, a + 1, a + n + 1;
+        grid.triangles.row(t++) << a, a + n + 1, a + n;
+      }
+    mesh = to_trimesh(grid);
+    const int nf = static_cast<int>(mesh.n_faces());
+    partition.face_component.assign(nf, 0);
+    partition.organic_components = 1;
+    field.direction = FaceVectors(nf, 3);
+    field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
+    field.size_u = field.size_v = Eigen::VectorXd::Constant(nf, 1.0);
+  }
+  TriMesh mesh;
+  Partition partition;
+  CrossField field;
+};
+
+// Quads of a cage in the xy plane that face down or have a corner under 1°.
+int bad_flat_quads(const QuadCage& cage) {
+  int bad = 0;
+  for (int q = 0; q < cage.quads.rows(); ++q) {
+    Vec3 c[4];
+    for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+    bool wrong = (c[2] - c[0]).cross(c[3] - c[1]).z() <= 0;
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
+      wrong |= std::atan2(a.cross(b).norm(), a.dot(b)) < M_PI / 180;
+    }
+    bad += wrong;
+  }
+  return bad;
+}
+
 }  // namespace
 
 
@@ -369,28 +413,9 @@ TEST(Quad, AWidePatchBetweenShortArcsKeepsARow) {
 // one 0.2 away when joining is off.
 TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   const int n = 41;
-  const double h = 0.1;
-  TriangleMesh grid;
-  grid.vertices.resize(n * n, 3);
-  grid.triangles.resize(2 * (n - 1) * (n - 1), 3);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) grid.vertices.row(i * n + j) << j * h, i * h, 0;
-  for (int i = 0, t = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      const int a = i * n + j;
-      grid.triangles.row(t++) << a, a + 1, a + n + 1;
-      grid.triangles.row(t++) << a, a + n + 1, a + n;
-    }
-  const TriMesh mesh = to_trimesh(grid);
-  const int nf = static_cast<int>(mesh.n_faces());
-  Partition partition;
-  partition.face_component.assign(nf, 0);
-  partition.organic_components = 1;
-  CrossField field;
-  field.direction = FaceVectors(nf, 3);
-  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
-  field.size_u = field.size_v = Eigen::VectorXd::Constant(nf, 1.0);
-  const quad_detail::Surface s(mesh, partition, field, 0);
+  const FlatGrid flat(n, 0.1);
+  const TriMesh& mesh = flat.mesh;
+  const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
   auto vertex = [&](int i, int j) { return i * n + j; };
   auto straight = [&](std::vector<int> vertices, const Vec3& d) {
     quad_detail::Curve c;
@@ -448,6 +473,73 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   EXPECT_EQ(off.parallel_joins, 0);
   ASSERT_EQ(off.curves.size(), 3u);
   EXPECT_NEAR(x_of(off.curves.back().vertices.back()), 3.0, 1e-9);
+}
+
+// A regular 6 × 6 cage on a flat square, one interior vertex split in two: the quad added
+// between the halves has corners of valence 3, 5, 3, 5 (two ± pairs). Collapsing it along
+// its valence-3 diagonal gives back a cage whose interior vertices all have valence 4; a
+// regular cage has nothing to cancel.
+TEST(Quad, IrregularPairsAreCancelledByADiagonalCollapse) {
+  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  const int m = 7;  // cage vertices per side
+  QuadCage cage;
+  cage.component = 0;
+  cage.vertices.resize(m * m, 3);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) cage.vertices.row(i * m + j) << j, i, 0;
+  cage.quads.resize((m - 1) * (m - 1), 4);
+  for (int i = 0, q = 0; i + 1 < m; ++i)
+    for (int j = 0; j + 1 < m; ++j, ++q)
+      cage.quads.row(q) << i * m + j, i * m + j + 1, (i + 1) * m + j + 1, (i + 1) * m + j;
+  std::vector<int> chain;
+  for (int j = 0; j < m - 1; ++j) chain.push_back(j);
+  for (int i = 0; i < m - 1; ++i) chain.push_back(i * m + m - 1);
+  for (int j = m - 1; j > 0; --j) chain.push_back((m - 1) * m + j);
+  for (int i = m - 1; i > 0; --i) chain.push_back(i * m);
+  cage.boundary_chains = {chain};
+  cage.chain_loop = {0};
+  const auto interior_valences = [](const QuadCage& c) {
+    std::map<int, int> quads_at;
+    for (int q = 0; q < c.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) ++quads_at[c.quads(q, k)];
+    const std::set<int> on_chain(c.boundary_chains[0].begin(), c.boundary_chains[0].end());
+    std::map<int, int> histogram;  // valence → interior vertices
+    for (auto& [v, n] : quads_at)
+      if (!on_chain.count(v)) ++histogram[n];
+    return histogram;
+  };
+  QuadCage regular = cage;
+  EXPECT_EQ(quad_detail::cancel_irregular_pairs(checks, regular, 4), 0);
+  EXPECT_TRUE(regular.vertices == cage.vertices && regular.quads == cage.quads);
+
+  // Split the centre vertex v = (3, 3) into v at x = 2.75 and w at x = 3.25: the quads
+  // right of x = 3 take w, and the new quad (v, below, w, above) fills the gap.
+  const int v = 3 * m + 3, below = 2 * m + 3, above = 4 * m + 3, w = m * m;
+  QuadCage split = cage;
+  split.vertices.conservativeResize(m * m + 1, 3);
+  split.vertices.row(v) << 2.75, 3, 0;
+  split.vertices.row(w) << 3.25, 3, 0;
+  for (int q = 0; q < split.quads.rows(); ++q) {
+    Vec3 centre = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) centre += 0.25 * cage.vertices.row(cage.quads(q, k)).transpose();
+    for (int k = 0; k < 4; ++k)
+      if (split.quads(q, k) == v && centre.x() > 3) split.quads(q, k) = w;
+  }
+  split.quads.conservativeResize(split.quads.rows() + 1, 4);
+  split.quads.row(split.quads.rows() - 1) << v, below, w, above;
+  ASSERT_EQ(interior_valences(split), (std::map<int, int>{{3, 2}, {4, 22}, {5, 2}}));
+  ASSERT_EQ(bad_flat_quads(split), 0);
+  EXPECT_EQ(quad_detail::cancel_irregular_pairs(checks, split, 4), 1);
+  EXPECT_EQ(split.quads.rows(), 36);
+  EXPECT_EQ(interior_valences(split), (std::map<int, int>{{4, 25}}));
+  EXPECT_EQ(bad_flat_quads(split), 0);
+  // The merged vertex sits on the surface halfway between the two halves.
+  bool centre = false;
+  for (int i = 0; i < split.vertices.rows(); ++i)
+    centre |= (split.vertices.row(i) - Eigen::RowVector3d(3, 3, 0)).norm() < 1e-9;
+  EXPECT_TRUE(centre);
 }
 
 TEST(Quad, TwoArchesGiveTwoValidCages) {

@@ -205,8 +205,22 @@ QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
 // The merged vertex goes to the diagonal's midpoint, projected onto the component, or
 // stays at the end that lies on a chain; vertices are renumbered (chains and creases
 // follow). Returns the count.
+// `diagonal` (optional, one per quad of `bad`): collapse that diagonal (0: corners 0–2,
+// 1: corners 1–3) instead of the shorter one.
+// `done` (optional) receives the quads of `bad` that were collapsed (indices before).
 int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
-                       const std::vector<int>& bad);
+                       const std::vector<int>& bad, const std::vector<int>& diagonal = {},
+                       std::vector<int>* done = nullptr);
+// Cancels irregular vertices in pairs by diagonal collapses (the simplification step of
+// Tarini et al. 2010, "Practical quad mesh simplification"): a quad with four interior
+// corners is collapsed along a diagonal when that leaves fewer irregular vertices among
+// its corners (merged valence a + c − 2 ≤ 5, the other two corners keep ≥ 3 quads), the
+// best gains first; the quads around the merged vertices are then opened by smoothing.
+// A collapse next to a quad that comes out squeezed or turned over (and stays so after
+// smoothing) is left out and the rest tried again, at most 4 times; then the next round
+// looks for new candidates, at most `max_rounds` rounds. Returns the collapses (0: the
+// cage is unchanged).
+int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds);
 // Evens out a valid cage: for `sweeps` sweeps every free vertex moves `step` of the way to
 // the mean of its neighbours, in its tangent plane and back onto the component; a move
 // that would make one of its quads squeezed or turned over is undone. Returns the vertices
