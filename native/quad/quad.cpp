@@ -416,8 +416,8 @@ bool comfortably_meets_targets(const QuadStats& s) {
 // One component. The layout depends on a few discrete choices (how corners are read,
 // whether separatrices join nearly parallel curves, which singularity pairs cancel, which
 // singularities the boundary absorbs, whether separatrices cross, whether unbalanced
-// patches are merged). They are tried in turn, each
-// from scratch (a layout equal to an earlier one is not filled again), until a cage meets
+// patches are merged). They are tried in turn, each from scratch (a layout equal to an
+// earlier one is not filled again), until a cage meets
 // the targets with a margin, or until the work budget after the first cage that meets them
 // is spent (QuadOptions::work_after_meeting). Kept: among the cages meeting the targets, preferably one
 // that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit

@@ -4,6 +4,8 @@
 // mesh can only meet at a vertex, so "stop at the first claimed vertex" yields an embedded
 // layout graph without any intersection arithmetic. To keep an edge path on the field line
 // the walk tracks the ideal streamline point and picks the forward neighbour closest to it.
+// As a layout choice, a walk that comes close beside a nearly parallel curve joins it
+// across a short link curve instead of converging onto it (parallel_join).
 #include <algorithm>
 #include <cmath>
 

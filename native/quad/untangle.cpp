@@ -4,6 +4,8 @@
 // vertices around them and projecting them back onto the component.
 // Only vertices within a few rings of a bad quad move, so the rest of the cage, its
 // boundary chains (on the loops) and its irregular vertices stay where the layout put them.
+// Also here: the diagonal collapses of that repair, reused to cancel irregular vertices
+// the layout left in pairs (cancel_irregular_pairs), doublet removal and evening out.
 // Complexity: O(rounds · moved vertices · log F) (closest points, locate.cpp).
 #include <algorithm>
 #include <cmath>
