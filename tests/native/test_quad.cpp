@@ -542,6 +542,59 @@ TEST(Quad, IrregularPairsAreCancelledByADiagonalCollapse) {
   EXPECT_TRUE(centre);
 }
 
+// The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four
+// curves, with a curve S across it at y = 2 and a separatrix leaving the left side at
+// y = 2.2 that joins S, the layout has three four-sided patches (below S, the strip
+// between S and the separatrix, the rest) without any corner re-read or cut added; the
+// patch above has the link between the separatrix and S inside one of its sides.
+TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
+  const int n = 41;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  auto vertex = [&](int i, int j) { return i * n + j; };
+  auto curve = [&](int i0, int j0, int i1, int j1) {
+    quad_detail::Curve c;
+    const int steps = std::max(std::abs(i1 - i0), std::abs(j1 - j0));
+    const Vec3 d = Vec3(j1 - j0, i1 - i0, 0).normalized();
+    for (int t = 0; t <= steps; ++t)
+      c.vertices.push_back(vertex(i0 + (i1 - i0) * t / steps, j0 + (j1 - j0) * t / steps));
+    c.direction.assign(c.vertices.size(), d);
+    return c;
+  };
+  quad_detail::Layout layout = quad_detail::start_layout(s, {});
+  layout.curves = {curve(0, 0, 0, 40), curve(0, 40, 40, 40), curve(40, 40, 40, 0),
+                   curve(40, 0, 0, 0), curve(20, 0, 20, 40)};
+  for (int c = 0; c < 5; ++c) quad_detail::register_curve(s, layout, c);
+  for (int corner : {vertex(0, 0), vertex(0, 40), vertex(40, 40), vertex(40, 0)})
+    layout.node[corner] = 1;
+  layout.merge_parallel = 0.3;
+  const int start = vertex(22, 0);
+  std::vector<int> spokes;
+  for (auto oh : flat.mesh.voh_range(flat.mesh.vertex_handle(start))) spokes.push_back(oh.idx());
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes, Vec3(1, 0, 0), true));
+  ASSERT_EQ(layout.parallel_joins, 1);
+  ASSERT_EQ(layout.curves.size(), 7u);
+  const int link_curve = 6;
+  ASSERT_TRUE(layout.curves[link_curve].link);
+
+  Diagnostics diagnostics;
+  const quad_detail::PatchLayout patches =
+      quad_detail::build_patches(s, layout, QuadOptions{}, diagnostics);
+  EXPECT_EQ(patches.patches.size(), 3u);
+  EXPECT_EQ(patches.recornered, 0);
+  EXPECT_EQ(layout.curves.size(), 7u);  // no cut traced
+  int link_inside_a_side = 0;
+  for (const auto& patch : patches.patches) {
+    ASSERT_EQ(patch.sides.size(), 4u);
+    for (const auto& side : patch.sides) {
+      bool has_link = false;
+      for (auto& [a, reversed] : side) has_link |= patches.arcs[a].curve == link_curve;
+      link_inside_a_side += has_link && side.size() >= 3;
+    }
+  }
+  EXPECT_EQ(link_inside_a_side, 1);
+}
+
 TEST(Quad, TwoArchesGiveTwoValidCages) {
   const Partitioned r = relaxed(partition_scene(two_arches_scene(0.05)));
   int problems = 0;
