@@ -243,10 +243,10 @@ Problem make_problem(const TriangleMesh& region, const std::vector<std::vector<V
   return p;
 }
 
-// State of one cage topology during the fit.
 // The larger of the two one-sided maxima: what the bound δ is checked against.
 double two_sided(const Measurement& m) { return std::max(m.max_design_to_limit, m.max_limit_to_design); }
 
+// State of one cage topology during the fit.
 struct Fitting {
   QuadCage cage;
   LimitSurface surface;
@@ -316,12 +316,13 @@ std::vector<int> folded_quads(const QuadCage& cage, int samples) {
   std::vector<Mesh::Vertex_index> vertex;
   for (Eigen::Index v = 0; v < t.vertices.rows(); ++v)
     vertex.push_back(mesh.add_vertex(Kernel::Point_3(t.vertices(v, 0), t.vertices(v, 1), t.vertices(v, 2))));
-  std::vector<int> all(cage.quads.rows());
-  for (size_t q = 0; q < all.size(); ++q) all[q] = static_cast<int>(q);
   for (Eigen::Index f = 0; f < t.triangles.rows(); ++f)
     if (mesh.add_face(vertex[t.triangles(f, 0)], vertex[t.triangles(f, 1)], vertex[t.triangles(f, 2)]) ==
-        Mesh::null_face())
+        Mesh::null_face()) {
+      std::vector<int> all(cage.quads.rows());
+      for (size_t q = 0; q < all.size(); ++q) all[q] = static_cast<int>(q);
       return all;
+    }
   std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
   CGAL::Polygon_mesh_processing::self_intersections(mesh, std::back_inserter(pairs));
   std::set<int> quads;

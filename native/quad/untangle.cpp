@@ -342,10 +342,7 @@ int cancel_pairs_once(const CageChecks& checks, QuadCage& cage, int max_attempts
   // tried again from the original cage.
   std::vector<char> excluded(original.quads.rows(), 0);
   std::vector<int> squeezed_before;  // quads already under the 5° bar (above measure's 1°)
-  {
-    QuadCage copy = original;
-    smooth_cage(checks.locator, checks.normals, copy, 0, kMinCornerDegrees, &squeezed_before);
-  }
+  smooth_cage(checks.locator, checks.normals, cage, 0, kMinCornerDegrees, &squeezed_before);
   for (int attempt = 0; attempt < max_attempts; ++attempt) {
     cage = original;
     std::vector<int> quads, diagonals, done;
