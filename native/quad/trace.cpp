@@ -315,6 +315,26 @@ std::vector<int> parallel_join(const Surface& s, const Layout& layout, int w, co
   return best;
 }
 
+// Whether a trace arriving at attractor i from point p comes in along one of its separatrix
+// directions (within half their spacing) along which no curve leaves it yet. Arriving
+// otherwise would add a sector to the singularity (a valence-6 cage vertex at a valence-5
+// singularity, one of its corners squeezed under 45°).
+bool free_arrival(const Surface& s, const Layout& layout, size_t i, const Vec3& p) {
+  if (i >= layout.attractor_directions.size() || layout.attractor_directions[i].empty()) return true;
+  const int a = layout.attractors[i];
+  const std::vector<Vec3>& directions = layout.attractor_directions[i];
+  const double half = std::cos(kPi / static_cast<double>(directions.size()));
+  const Vec3 in = s.tangent(a, p - s.point[a]);
+  const Vec3* along = nullptr;
+  for (const Vec3& d : directions)
+    if (in.dot(d) > half) along = &d;
+  if (!along) return false;
+  for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(a)))
+    if (layout.edge_curve[oh.idx() >> 1] >= 0 && layout.halfedge_dir[oh.idx()].dot(*along) > half)
+      return false;
+  return true;
+}
+
 }  // namespace
 
 bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<int> allowed,
@@ -335,11 +355,14 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
   for (int step = 0; step < static_cast<int>(s.vertices.size()) + 1; ++step) {
     int h = -1;
     // Near a singular vertex ahead, head straight for it: separatrices that pass a
-    // singularity at less than a third of an edge length would leave a sliver patch.
-    for (int a : layout.attractors) {
+    // singularity at less than a third of an edge length would leave a sliver patch. Only
+    // along one of its own separatrix directions that is still free (free_arrival).
+    for (size_t i = 0; i < layout.attractors.size(); ++i) {
+      const int a = layout.attractors[i];
       if (a == vertex || a == v) continue;
       const Vec3 to_a = s.point[a] - s.point[v];
       if (to_a.norm() > 0.75 * s.vertex_size[v] || to_a.normalized().dot(d) < 0.6) continue;
+      if (!free_arrival(s, layout, i, s.point[v])) continue;
       double best = to_a.norm();
       for (int c : allowed) {
         if (layout.edge_curve[c >> 1] >= 0) continue;
@@ -535,6 +558,7 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
     layout.attractors.push_back(interior[i].vertex);
     std::vector<int> spokes;
     const std::vector<Vec3> directions = singular_directions(s, interior[i].vertex, valence, &spokes);
+    layout.attractor_directions.push_back(directions);
     for (size_t k = 0; k < directions.size(); ++k) {
       if (rounds.size() <= k) rounds.resize(k + 1);
       rounds[k].push_back({interior[i].vertex, directions[k], 2 * kPi / valence, spokes});

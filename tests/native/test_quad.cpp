@@ -411,6 +411,88 @@ TEST(Quad, AWidePatchBetweenShortArcsKeepsARow) {
 // from S joins S across a link of at most two edges once it is clear of its start; one
 // that starts 0.6 away (beyond the 0.3 join distance) runs on to the barrier, and so does
 // one 0.2 away when joining is off.
+// Among layout choices: meeting the targets wins, then no collapsed quad, then fewer
+// irregular vertices, but counts within 5% are even and the smaller corner deviation wins.
+TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
+  auto stats = [](int interior, int regular, int irregular, double degrees, int collapsed) {
+    QuadStats s;
+    s.interior_vertices = interior;
+    s.interior_valence4 = regular;
+    s.boundary_vertices = 10;
+    s.boundary_valence3 = 10;
+    s.irregular_vertices = irregular;
+    s.mean_angle_deviation_deg = degrees;
+    s.collapsed_quads = collapsed;
+    return s;
+  };
+  const QuadStats few_skewed = stats(5000, 4870, 130, 9.3, 0);
+  const QuadStats more_square = stats(5000, 4869, 131, 6.8, 0);
+  const QuadStats many_square = stats(5000, 4850, 150, 6.0, 0);
+  const QuadStats missing = stats(5000, 4700, 300, 5.0, 0);  // 94% valence 4
+  const QuadStats collapsed = stats(5000, 4869, 100, 6.0, 2);
+  EXPECT_TRUE(quad_detail::better_cage(more_square, few_skewed));
+  EXPECT_FALSE(quad_detail::better_cage(few_skewed, more_square));
+  EXPECT_TRUE(quad_detail::better_cage(few_skewed, many_square));  // 20 more is not even
+  EXPECT_TRUE(quad_detail::better_cage(few_skewed, missing));
+  EXPECT_TRUE(quad_detail::better_cage(few_skewed, collapsed));
+  EXPECT_FALSE(quad_detail::better_cage(missing, collapsed));  // meeting wins over collapses
+  const QuadStats clean = stats(500, 500, 0, 9.0, 0), six = stats(500, 494, 6, 4.0, 0);
+  EXPECT_TRUE(quad_detail::better_cage(clean, six));  // 0 against 6 is not within 5%
+}
+
+// A walk passing near a singular vertex heads for it only along one of its separatrix
+// directions that no curve takes yet: arriving beside one that does would squeeze a sixth
+// corner into a valence-5 vertex.
+TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
+  const int n = 41;
+  const FlatGrid flat(n, 0.1);
+  const TriMesh& mesh = flat.mesh;
+  const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
+  auto vertex = [&](int i, int j) { return i * n + j; };
+  const int singular = vertex(20, 20);  // (2, 2)
+  auto fresh_layout = [&](bool taken) {
+    quad_detail::Layout layout = quad_detail::start_layout(s, {});
+    quad_detail::Curve barrier;
+    for (int i = 0; i < n; ++i) barrier.vertices.push_back(vertex(i, 30));  // x = 3
+    barrier.direction.assign(n, Vec3(0, 1, 0));
+    layout.curves.push_back(barrier);
+    if (taken) {  // a separatrix leaving the singularity towards −x
+      quad_detail::Curve left;
+      for (int j = 20; j >= 15; --j) left.vertices.push_back(vertex(20, j));
+      left.direction.assign(left.vertices.size(), Vec3(-1, 0, 0));
+      layout.curves.push_back(left);
+    }
+    for (int c = 0; c < static_cast<int>(layout.curves.size()); ++c)
+      quad_detail::register_curve(s, layout, c);
+    layout.attractors = {singular};
+    std::vector<Vec3> directions;  // valence 5, one 20° below −x (the walk comes in near it)
+    for (int k = 0; k < 5; ++k) {
+      const double angle = (200 + 72 * k) * M_PI / 180;
+      directions.push_back(Vec3(std::cos(angle), std::sin(angle), 0));
+    }
+    layout.attractor_directions = {directions};
+    layout.claimed[singular] = 1;
+    return layout;
+  };
+  auto spokes = [&](int v) {
+    std::vector<int> out;
+    for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
+    return out;
+  };
+  const int start = vertex(18, 10);  // (1, 1.8): would pass 0.2 beside the singularity
+  quad_detail::Layout free = fresh_layout(false);
+  ASSERT_TRUE(quad_detail::trace_direction(s, free, start, spokes(start), Vec3(1, 0, 0), true));
+  EXPECT_EQ(free.curves.back().vertices.back(), singular);
+
+  quad_detail::Layout taken = fresh_layout(true);
+  ASSERT_TRUE(quad_detail::trace_direction(s, taken, start, spokes(start), Vec3(1, 0, 0), true));
+  const int end = taken.curves.back().vertices.back();
+  EXPECT_NE(end, singular);
+  EXPECT_NEAR(mesh.point(mesh.vertex_handle(end))[0], 3.0, 1e-9);  // on the barrier
+  for (int v : taken.curves.back().vertices)
+    EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[1], 1.8, 1e-9);  // straight past it
+}
+
 TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   const int n = 41;
   const FlatGrid flat(n, 0.1);

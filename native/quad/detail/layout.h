@@ -82,6 +82,8 @@ struct Layout {
   double merge_parallel = 0;         // join a nearly parallel curve closer than this × size
   int parallel_joins = 0;
   std::vector<int> attractors;       // traced singular vertices (separatrices end on them)
+  // Per attractor: its separatrix directions (a walk heads for it only along a free one).
+  std::vector<std::vector<Vec3>> attractor_directions;
   int separatrices = 0;
   int cancelled_pairs = 0;
   int dropped_traces = 0;
@@ -233,6 +235,12 @@ int remove_doublets(QuadCage& cage);
 // Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
 // and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
 int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed);
+
+// Whether cage a is to be kept rather than cage b among a component's layout choices:
+// meeting issue 5's targets, then no collapsed quad, then (both meeting) fewer irregular
+// vertices unless the counts are within 5% of each other, then the smaller mean corner
+// deviation (quad.cpp).
+bool better_cage(const QuadStats& a, const QuadStats& b);
 
 // Last resort: a pure-quad cage that is not field-aligned (fallback.cpp), from a coarse
 // remesh at `coarse_edge_length` split once (cage edges about half that long).
