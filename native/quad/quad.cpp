@@ -188,7 +188,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   }
   if (stats.flipped_quads || stats.degenerate_quads) return stats;
   // Irregular vertices the layout left in ± pairs (collapsed slivers, merged nodes) are
-  // cancelled by diagonal collapses where a quad allows it; kept if the cage stays valid.
+  // cancelled by diagonal collapses and edge rotations where the quads allow it; kept if
+  // the cage stays valid.
   QuadCage cancelled = *cage;
   if (const int pairs = quad_detail::cancel_irregular_pairs(checks, cancelled, 4)) {
     const QuadStats cancelled_stats = quad_detail::measure_cage(cancelled, checks.normals);
@@ -198,8 +199,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
         cage_is_manifold(cancelled, &why)) {
       diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
                              std::to_string(pairs) +
-                             " quads collapsed along a diagonal to cancel irregular vertices "
-                             "in pairs (" + std::to_string(stats.irregular_vertices) + " → " +
+                             " diagonal collapses or edge rotations cancelled irregular "
+                             "vertices in pairs (" + std::to_string(stats.irregular_vertices) + " → " +
                              std::to_string(cancelled_stats.irregular_vertices) + ")");
       const int folded = stats.collapsed_quads;
       *cage = std::move(cancelled);

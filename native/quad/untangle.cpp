@@ -4,10 +4,12 @@
 // vertices around them and projecting them back onto the component.
 // Only vertices within a few rings of a bad quad move, so the rest of the cage, its
 // boundary chains (on the loops) and its irregular vertices stay where the layout put them.
-// Also here: the diagonal collapses of that repair, reused to cancel irregular vertices
-// the layout left in pairs (cancel_irregular_pairs), doublet removal and evening out.
+// Also here: the diagonal collapses of that repair, reused with edge rotations to cancel
+// irregular vertices the layout left in pairs (cancel_irregular_pairs), doublet removal
+// and evening out.
 // Complexity: O(rounds · moved vertices · log F) (closest points, locate.cpp).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 
@@ -382,10 +384,80 @@ int cancel_pairs_once(const CageChecks& checks, QuadCage& cage, int max_attempts
 
 }  // namespace
 
+int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage) {
+  const CageIncidence incidence(cage);
+  const auto& fixed = incidence.on_chain;
+  std::vector<int> valence(cage.vertices.rows());
+  for (int v = 0; v < static_cast<int>(valence.size()); ++v)
+    valence[v] = static_cast<int>(incidence.quads_of[v].size());
+  // The quad holding the directed edge a → b, and where in it (-1 if none).
+  auto holding = [&](int a, int b, int* at) {
+    for (int q : incidence.quads_of[a])
+      for (int k = 0; k < 4; ++k)
+        if (cage.quads(q, k) == a && cage.quads(q, (k + 1) % 4) == b) return *at = k, q;
+    return -1;
+  };
+  struct Rotation { int gain, q1, q2; std::array<int, 4> first, second; int u, w, x, y; };
+  std::vector<Rotation> rotations;
+  for (int u = 0; u < static_cast<int>(valence.size()); ++u)
+    for (int w : incidence.neighbours[u]) {
+      if (w < u || fixed[u] || fixed[w] || valence[u] < 4 || valence[w] < 4) continue;
+      int k1 = 0, k2 = 0;
+      const int q1 = holding(u, w, &k1), q2 = holding(w, u, &k2);
+      if (q1 < 0 || q2 < 0 || q1 == q2) continue;
+      // q1 = (u, w, a, b), q2 = (w, u, c, d): the hexagon u, c, d, w, a, b.
+      const int a = cage.quads(q1, (k1 + 2) % 4), b = cage.quads(q1, (k1 + 3) % 4);
+      const int c = cage.quads(q2, (k2 + 2) % 4), d = cage.quads(q2, (k2 + 3) % 4);
+      const int ring[6] = {u, c, d, w, a, b};
+      bool distinct = true;
+      for (int i = 0; i < 6; ++i)
+        for (int j = i + 1; j < 6; ++j) distinct &= ring[i] != ring[j];
+      if (!distinct) continue;
+      auto irregular = [&](int v, int change) { return valence[v] + change != 4; };
+      const int before = irregular(u, 0) + irregular(w, 0);
+      // The new diagonal c–a (quads c, d, w, a and a, b, u, c) or d–b (d, w, a, b and
+      // b, u, c, d): u and w lose a quad, its ends gain one.
+      for (int r = 0; r < 2; ++r) {
+        const int x = r == 0 ? c : d, y = r == 0 ? a : b;
+        if (fixed[x] || fixed[y] || incidence.neighbours[x].count(y)) continue;
+        const int gain = before + irregular(x, 0) + irregular(y, 0) -
+                         (irregular(u, -1) + irregular(w, -1) + irregular(x, 1) + irregular(y, 1));
+        if (gain <= 0) continue;
+        Rotation rotation{gain, q1, q2, {}, {}, u, w, x, y};
+        if (r == 0) rotation.first = {c, d, w, a}, rotation.second = {a, b, u, c};
+        else rotation.first = {d, w, a, b}, rotation.second = {b, u, c, d};
+        rotations.push_back(rotation);
+      }
+    }
+  std::stable_sort(rotations.begin(), rotations.end(),
+                   [](const Rotation& p, const Rotation& q) { return p.gain > q.gain; });
+  // One at a time, no two sharing a quad or a changed vertex; a rotation whose new quads
+  // come out squeezed or turned over is undone.
+  std::vector<char> touched_quad(cage.quads.rows(), 0), touched_vertex(valence.size(), 0);
+  int done = 0;
+  for (const Rotation& r : rotations) {
+    if (touched_quad[r.q1] || touched_quad[r.q2]) continue;
+    if (touched_vertex[r.u] || touched_vertex[r.w] || touched_vertex[r.x] || touched_vertex[r.y])
+      continue;
+    const Eigen::RowVector4i old1 = cage.quads.row(r.q1), old2 = cage.quads.row(r.q2);
+    for (int k = 0; k < 4; ++k) cage.quads(r.q1, k) = r.first[k], cage.quads(r.q2, k) = r.second[k];
+    if (quad_is_bad(checks.locator, checks.normals, cage, r.q1, kMinCornerDegrees) ||
+        quad_is_bad(checks.locator, checks.normals, cage, r.q2, kMinCornerDegrees)) {
+      cage.quads.row(r.q1) = old1, cage.quads.row(r.q2) = old2;
+      continue;
+    }
+    touched_quad[r.q1] = touched_quad[r.q2] = 1;
+    for (int v : {r.u, r.w, r.x, r.y}) touched_vertex[v] = 1;
+    ++done;
+  }
+  return done;
+}
+
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds) {
   int total = 0;
   for (int round = 0; round < max_rounds; ++round) {
-    const int now = cancel_pairs_once(checks, cage, 4);
+    int now = cancel_pairs_once(checks, cage, 4);
+    if (!now) now = rotate_edges_for_pairs(checks, cage);
     if (!now) break;
     total += now;
   }

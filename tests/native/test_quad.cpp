@@ -206,6 +206,39 @@ struct FlatGrid {
   CrossField field;
 };
 
+// A regular m × m cage of unit quads in the xy plane, its border one chain.
+QuadCage regular_flat_cage(int m) {
+  QuadCage cage;
+  cage.component = 0;
+  cage.vertices.resize(m * m, 3);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) cage.vertices.row(i * m + j) << j, i, 0;
+  cage.quads.resize((m - 1) * (m - 1), 4);
+  for (int i = 0, q = 0; i + 1 < m; ++i)
+    for (int j = 0; j + 1 < m; ++j, ++q)
+      cage.quads.row(q) << i * m + j, i * m + j + 1, (i + 1) * m + j + 1, (i + 1) * m + j;
+  std::vector<int> chain;
+  for (int j = 0; j < m - 1; ++j) chain.push_back(j);
+  for (int i = 0; i < m - 1; ++i) chain.push_back(i * m + m - 1);
+  for (int j = m - 1; j > 0; --j) chain.push_back((m - 1) * m + j);
+  for (int i = m - 1; i > 0; --i) chain.push_back(i * m);
+  cage.boundary_chains = {chain};
+  cage.chain_loop = {0};
+  return cage;
+}
+
+// Interior vertices of a cage with one chain, by valence.
+std::map<int, int> interior_valences(const QuadCage& c) {
+  std::map<int, int> quads_at;
+  for (int q = 0; q < c.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) ++quads_at[c.quads(q, k)];
+  const std::set<int> on_chain(c.boundary_chains[0].begin(), c.boundary_chains[0].end());
+  std::map<int, int> histogram;  // valence → interior vertices
+  for (auto& [v, n] : quads_at)
+    if (!on_chain.count(v)) ++histogram[n];
+  return histogram;
+}
+
 // Quads of a cage in the xy plane that face down or have a corner under 1°.
 int bad_flat_quads(const QuadCage& cage) {
   int bad = 0;
@@ -566,32 +599,7 @@ TEST(Quad, IrregularPairsAreCancelledByADiagonalCollapse) {
   const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
   const quad_detail::CageChecks checks(s);
   const int m = 7;  // cage vertices per side
-  QuadCage cage;
-  cage.component = 0;
-  cage.vertices.resize(m * m, 3);
-  for (int i = 0; i < m; ++i)
-    for (int j = 0; j < m; ++j) cage.vertices.row(i * m + j) << j, i, 0;
-  cage.quads.resize((m - 1) * (m - 1), 4);
-  for (int i = 0, q = 0; i + 1 < m; ++i)
-    for (int j = 0; j + 1 < m; ++j, ++q)
-      cage.quads.row(q) << i * m + j, i * m + j + 1, (i + 1) * m + j + 1, (i + 1) * m + j;
-  std::vector<int> chain;
-  for (int j = 0; j < m - 1; ++j) chain.push_back(j);
-  for (int i = 0; i < m - 1; ++i) chain.push_back(i * m + m - 1);
-  for (int j = m - 1; j > 0; --j) chain.push_back((m - 1) * m + j);
-  for (int i = m - 1; i > 0; --i) chain.push_back(i * m);
-  cage.boundary_chains = {chain};
-  cage.chain_loop = {0};
-  const auto interior_valences = [](const QuadCage& c) {
-    std::map<int, int> quads_at;
-    for (int q = 0; q < c.quads.rows(); ++q)
-      for (int k = 0; k < 4; ++k) ++quads_at[c.quads(q, k)];
-    const std::set<int> on_chain(c.boundary_chains[0].begin(), c.boundary_chains[0].end());
-    std::map<int, int> histogram;  // valence → interior vertices
-    for (auto& [v, n] : quads_at)
-      if (!on_chain.count(v)) ++histogram[n];
-    return histogram;
-  };
+  const QuadCage cage = regular_flat_cage(m);
   QuadCage regular = cage;
   EXPECT_EQ(quad_detail::cancel_irregular_pairs(checks, regular, 4), 0);
   EXPECT_TRUE(regular.vertices == cage.vertices && regular.quads == cage.quads);
@@ -622,6 +630,36 @@ TEST(Quad, IrregularPairsAreCancelledByADiagonalCollapse) {
   for (int i = 0; i < split.vertices.rows(); ++i)
     centre |= (split.vertices.row(i) - Eigen::RowVector3d(3, 3, 0)).norm() < 1e-9;
   EXPECT_TRUE(centre);
+}
+
+// An edge whose rotation left two valence-3 and two valence-5 vertices is rotated back.
+TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
+  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  const int m = 7;
+  QuadCage regular = regular_flat_cage(m);
+  EXPECT_EQ(quad_detail::rotate_edges_for_pairs(checks, regular), 0);
+  // Around the edge u = (2, 3) – w = (3, 3): the quads above, (u, w, a, b), and below,
+  // (c, d, w, u), become (c, d, w, a) and (a, b, u, c); u and w move apart to keep both
+  // convex.
+  const int u = 3 * m + 2, w = 3 * m + 3, a = 4 * m + 3, b = 4 * m + 2, c = 2 * m + 2,
+            d = 2 * m + 3;
+  QuadCage rotated = regular;
+  rotated.vertices.row(u) << 1.7, 3, 0;
+  rotated.vertices.row(w) << 3.3, 3, 0;
+  rotated.quads.row(3 * (m - 1) + 2) << c, d, w, a;
+  rotated.quads.row(2 * (m - 1) + 2) << a, b, u, c;
+  ASSERT_EQ(interior_valences(rotated), (std::map<int, int>{{3, 2}, {4, 21}, {5, 2}}));
+  ASSERT_EQ(bad_flat_quads(rotated), 0);
+  QuadCage cancelled = rotated;
+  EXPECT_EQ(quad_detail::rotate_edges_for_pairs(checks, cancelled), 1);
+  EXPECT_EQ(interior_valences(cancelled), (std::map<int, int>{{4, 25}}));
+  EXPECT_EQ(bad_flat_quads(cancelled), 0);
+  EXPECT_TRUE(cancelled.vertices == rotated.vertices);  // only the connectivity changes
+  // Through cancel_irregular_pairs (no diagonal collapse helps here).
+  EXPECT_EQ(quad_detail::cancel_irregular_pairs(checks, rotated, 4), 1);
+  EXPECT_EQ(interior_valences(rotated), (std::map<int, int>{{4, 25}}));
 }
 
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four

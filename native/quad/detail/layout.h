@@ -220,9 +220,16 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 // best gains first; the quads around the merged vertices are then opened by smoothing.
 // A collapse next to a quad that comes out squeezed or turned over (and stays so after
 // smoothing) is left out and the rest tried again, at most 4 times; then the next round
-// looks for new candidates, at most `max_rounds` rounds. Returns the collapses (0: the
-// cage is unchanged).
+// looks for new candidates; a round with no collapse tries edge rotations
+// (rotate_edges_for_pairs); at most `max_rounds` rounds. Returns the collapses and
+// rotations (0: the cage is unchanged).
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds);
+// Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
+// between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
+// new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
+// two sharing a quad or a changed vertex; one whose new quads come out squeezed or turned
+// over is undone. Vertices do not move. Returns the rotations made.
+int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage);
 // Evens out a valid cage: for `sweeps` sweeps every free vertex moves `step` of the way to
 // the mean of its neighbours, in its tangent plane and back onto the component; a move
 // that would make one of its quads squeezed or turned over is undone. Returns the vertices
