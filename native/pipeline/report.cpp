@@ -224,6 +224,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
                    {"max_angle_deviation_degrees", s.max_angle_deviation_deg},
                    {"flipped_quads", s.flipped_quads},
                    {"collapsed_quads", s.collapsed_quads},
+                   {"oversized_quads", s.oversized_quads},
                    {"patches", s.patches},
                    {"method", s.fallback ? "fallback: split coarse remesh, not field-aligned" : "field-aligned patch layout"},
                    {"seconds", s.seconds}};

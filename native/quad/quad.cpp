@@ -49,6 +49,11 @@ std::array<long, 3> DesignNormals::key(const Vec3& p) const {
 }
 
 Vec3 DesignNormals::nearest_normal(const Vec3& p) const {
+  const int v = nearest_vertex(p);
+  return v < 0 ? Vec3(Vec3::Zero()) : normal_[v];
+}
+
+int DesignNormals::nearest_vertex(const Vec3& p) const {
   const auto k = key(p);
   int best = -1;
   double best_d = 1e300;
@@ -63,7 +68,23 @@ Vec3 DesignNormals::nearest_normal(const Vec3& p) const {
             if (d < best_d) best_d = d, best = v;
           }
         }
-  return best < 0 ? Vec3(Vec3::Zero()) : normal_[best];
+  return best;
+}
+
+int oversized_quads(const CageChecks& checks, const QuadCage& cage, double density,
+                    double factor) {
+  int oversized = 0;
+  for (int q = 0; q < cage.quads.rows(); ++q) {
+    Vec3 c[4], centre = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose(), centre += 0.25 * c[k];
+    const int v = checks.normals.nearest_vertex(centre);
+    if (v < 0 || checks.surface.vertex_size[v] <= 0) continue;
+    const double limit = factor * checks.surface.vertex_size[v] / density;
+    bool long_edge = false;
+    for (int k = 0; k < 4; ++k) long_edge |= (c[(k + 1) % 4] - c[k]).norm() > limit;
+    oversized += long_edge;
+  }
+  return oversized;
 }
 
 bool DesignNormals::flipped(const Vec3 (&c)[4]) const {
@@ -347,6 +368,12 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
     diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
                            " doublets (interior vertices of two quads) removed");
   *stats = measure_untangled(surface, checks, cage, diagnostics);
+  stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, 2.5);
+  if (stats->oversized_quads)
+    diagnostics->push_back("component " + std::to_string(c) + ": " +
+                           std::to_string(stats->oversized_quads) +
+                           " quads have an edge longer than 2.5x the target edge length "
+                           "(quantization squeezed patches whose opposite sides differ)");
   stats->patches = static_cast<int>(patches.patches.size());
   stats->separatrices = layout.separatrices;
   stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

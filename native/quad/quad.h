@@ -118,6 +118,9 @@ struct QuadStats {
   int separatrices = 0;
   bool fallback = false;  // no field-aligned layout worked: the split coarse remesh (not aligned)
   int collapsed_quads = 0;  // quads that stayed folded after smoothing, collapsed (untangle)
+  // Quads with an edge longer than 2.5× the local target edge length (quantization
+  // squeezed their patch; quad_detail::oversized_quads).
+  int oversized_quads = 0;
   double seconds = 0;
   double interior_valence4_fraction() const {
     return interior_vertices ? double(interior_valence4) / interior_vertices : 1.0;

@@ -662,6 +662,21 @@ TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
   EXPECT_EQ(interior_valences(rotated), (std::map<int, int>{{4, 25}}));
 }
 
+// Quads stretched beyond 2.5× the local target edge length are counted: on a flat grid of
+// target size 1, a regular cage of unit quads has none; stretching its last column to
+// 3 units makes that column's 6 quads oversized, and at density 0.5 (target 2) none are.
+TEST(Quad, QuadsStretchedBeyondTheTargetSizeAreCounted) {
+  const FlatGrid flat(61, 0.2);  // the square [0, 12]², target size 1
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  const int m = 7;
+  QuadCage cage = regular_flat_cage(m);
+  EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 1.0, 2.5), 0);
+  for (int i = 0; i < m; ++i) cage.vertices(i * m + m - 1, 0) = 8;  // last column: x 5 → 8
+  EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 1.0, 2.5), m - 1);
+  EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 0.5, 2.5), 0);
+}
+
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four
 // curves, with a curve S across it at y = 2 and a separatrix leaving the left side at
 // y = 2.2 that joins S, the layout has three four-sided patches (below S, the strip

@@ -176,6 +176,7 @@ class ComponentLocator {
 class DesignNormals {
  public:
   explicit DesignNormals(const TriMesh& design);
+  int nearest_vertex(const Vec3& p) const;   // -1 if the design has no vertex
   Vec3 nearest_normal(const Vec3& p) const;  // zero if the design has no vertex
   bool flipped(const Vec3 (&corner)[4]) const;
 
@@ -190,10 +191,18 @@ class DesignNormals {
 // What measuring and repairing a cage test against, built once per component: closest
 // points on the component and the design's vertex normals.
 struct CageChecks {
-  explicit CageChecks(const Surface& s) : locator(s), normals(s.mesh) {}
+  explicit CageChecks(const Surface& s) : surface(s), locator(s), normals(s.mesh) {}
+  const Surface& surface;
   ComponentLocator locator;
   DesignNormals normals;
 };
+
+// Quads with an edge longer than `factor` × the local target edge length (the component's
+// size at the design vertex nearest the quad's centre, divided by `density`): where
+// quantization squeezed a patch whose opposite sides differ, its quads stretch across
+// (quad.cpp).
+int oversized_quads(const CageChecks& checks, const QuadCage& cage, double density,
+                    double factor);
 
 // measure_cage (quad.h) with the design's normals already built.
 QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
