@@ -7,9 +7,12 @@
 // of its longest arc); a wrong corner count is fixed by choosing the four nodes that best
 // make a rectangle (best_corners; options.fit_corners) or, the older way, by re-reading
 // the most ambiguous angle one at a time and, failing that, taking the four sharpest turns.
+// A valid patch whose opposite sides differ several times over (a wedge) gets one more
+// cut across (options.wedge_cut_ratio).
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "quad/detail/layout.h"
 
@@ -179,6 +182,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                           Diagnostics& diagnostics) {
   const std::string who = "component " + std::to_string(s.component);
   std::map<int, int> quarter_override;  // by the sector's outgoing halfedge
+  std::set<int> wedge_tried;             // wedge patches cut once, by their first face
   PatchLayout out;
   for (int round = 0;; ++round) {
     build_arcs(s, layout, out);
@@ -210,6 +214,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       // When no cut can be traced: a stretch of an open curve to take off the layout
       // (vertex list; a dangling separatrix, or the shortest arc of a sliver patch).
       std::vector<int> remove_stretch;
+      bool optional = false;  // a wedge's cut: the patch stays as it is if none traces
     };
     // The shortest arc of an open curve on the patch boundary, to merge the patch with its
     // neighbour when it cannot be cut.
@@ -444,6 +449,28 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           patch.sides[side].push_back({code / 2, (code & 1) != 0});
         }
       }
+      // A wedge: opposite sides whose targets differ several times over (a triangle read
+      // as a rectangle) can only be balanced by squeezing the long one
+      // (QuadOptions::wedge_cut_ratio). It is cut from the middle of its boundary, once;
+      // if no cut traces, it stays as it is.
+      const double wedge_ratio = options.wedge_cut_ratio;
+      if (wedge_ratio > 0 && !wedge_tried.count(patch.faces.front())) {
+        bool wedge = false;
+        for (int pair = 0; pair < 2; ++pair) {
+          double side[2] = {0, 0};
+          for (int k = 0; k < 2; ++k)
+            for (auto& [a, reversed] : patch.sides[pair + 2 * k])
+              side[k] += out.arcs[a].target * options.density;
+          const double lo = std::min(side[0], side[1]), hi = std::max(side[0], side[1]);
+          wedge |= hi >= 3 && hi > wedge_ratio * std::max(lo, 0.5);
+        }
+        if (wedge) {
+          wedge_tried.insert(patch.faces.front());
+          fixes.push_back(middle_cuts(cycles));
+          fixes.back().optional = true;
+          continue;
+        }
+      }
       out.patches.push_back(patch);
     }
     if (fixes.empty()) break;
@@ -475,7 +502,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         ++out.recornered;
         done = true;
       }
-      traced += done;
+      traced += done || fix.optional;
     }
     GENBREP_CHECK(traced > 0, Code::StageFailure,
                   "quad: " + who + ": no extra cut could be traced into an invalid patch");

@@ -77,6 +77,11 @@ struct QuadOptions {
   // Patches whose angles do not give four corners: choose the four nodes that best make a
   // rectangle (angles and opposite side lengths), or re-read one angle at a time (false).
   bool fit_corners = true;
+  // A four-cornered patch one of whose pairs of opposite sides differs by more than this
+  // factor (the longer at least 3 cage edges) is a wedge, a triangle read as a rectangle:
+  // quantization could balance it only by squeezing the longer side, so it gets one more
+  // cut across. 0: never.
+  double wedge_cut_ratio = 2.0;
   // Rounds of extra cuts for patches that are not disks with four corners.
   int max_fix_rounds = 64;
   // Rounds of merging patches whose sides cannot balance, before quantization gives up.

@@ -730,6 +730,71 @@ TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   EXPECT_EQ(link_inside_a_side, 1);
 }
 
+// A wedge (a four-cornered patch whose opposite sides differ several times over) gets a
+// cut across: on a flat 4 × 4 square bounded by four curves, a diagonal curve from (0, 1)
+// to (3, 4) leaves a patch whose corners make a 4-long side face a 1-long one. With
+// wedge cuts off that patch stays; with them on, a cut runs across it.
+TEST(Quad, AWedgePatchIsCutAcross) {
+  const int n = 41;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  auto vertex = [&](int i, int j) { return i * n + j; };
+  auto curve = [&](int i0, int j0, int i1, int j1) {
+    quad_detail::Curve c;
+    const int steps = std::max(std::abs(i1 - i0), std::abs(j1 - j0));
+    const Vec3 d = Vec3(j1 - j0, i1 - i0, 0).normalized();
+    for (int t = 0; t <= steps; ++t)
+      c.vertices.push_back(vertex(i0 + (i1 - i0) * t / steps, j0 + (j1 - j0) * t / steps));
+    c.direction.assign(c.vertices.size(), d);
+    return c;
+  };
+  auto layout_of = [&] {
+    quad_detail::Layout layout = quad_detail::start_layout(s, {});
+    layout.curves = {curve(0, 0, 0, 40), curve(0, 40, 40, 40), curve(40, 40, 40, 0),
+                     curve(40, 0, 0, 0), curve(10, 0, 40, 30)};
+    for (int c = 0; c < 5; ++c) quad_detail::register_curve(s, layout, c);
+    for (int corner : {vertex(0, 0), vertex(0, 40), vertex(40, 40), vertex(40, 0)})
+      layout.node[corner] = 1;
+    return layout;
+  };
+  auto worst_ratio = [](const quad_detail::PatchLayout& patches) {
+    double worst = 1;
+    for (const auto& patch : patches.patches)
+      for (int pair = 0; pair < 2; ++pair) {
+        double side[2] = {0, 0};
+        for (int k = 0; k < 2; ++k)
+          for (auto& [a, reversed] : patch.sides[pair + 2 * k]) side[k] += patches.arcs[a].target;
+        const double lo = std::min(side[0], side[1]), hi = std::max(side[0], side[1]);
+        if (hi >= 3) worst = std::max(worst, hi / std::max(lo, 0.5));
+      }
+    return worst;
+  };
+  Diagnostics diagnostics;
+  QuadOptions off;
+  off.wedge_cut_ratio = 0;
+  quad_detail::Layout plain = layout_of();
+  const quad_detail::PatchLayout uncut = quad_detail::build_patches(s, plain, off, diagnostics);
+  EXPECT_GT(worst_ratio(uncut), 2.0);
+  quad_detail::Layout cut = layout_of();
+  const quad_detail::PatchLayout patches = quad_detail::build_patches(s, cut, QuadOptions{}, diagnostics);
+  // The cut runs across the wedge from inside its long bottom side (to the diagonal); its
+  // two halves are closer to rectangles than the wedge was (one cut per patch: the half
+  // beside the 45° diagonal keeps sides 3 and 1).
+  auto starts_on_bottom = [&](const quad_detail::Layout& layout) {
+    int count = 0;
+    for (size_t c = 5; c < layout.curves.size(); ++c)
+      for (int v : {layout.curves[c].vertices.front(), layout.curves[c].vertices.back()}) {
+        const auto p = flat.mesh.point(flat.mesh.vertex_handle(v));
+        count += std::abs(p[1]) < 1e-9 && p[0] > 0.5 && p[0] < 3.5;
+      }
+    return count;
+  };
+  EXPECT_EQ(starts_on_bottom(plain), 0);
+  EXPECT_EQ(starts_on_bottom(cut), 1);
+  EXPECT_NEAR(worst_ratio(uncut), 4.0, 0.1);  // bottom 4 against top 1
+  EXPECT_LT(worst_ratio(patches), 3.5);
+}
+
 TEST(Quad, TwoArchesGiveTwoValidCages) {
   const Partitioned r = relaxed(partition_scene(two_arches_scene(0.05)));
   int problems = 0;
