@@ -239,6 +239,32 @@ std::map<int, int> interior_valences(const QuadCage& c) {
   return histogram;
 }
 
+// A straight layout curve on a FlatGrid of n × n vertices from grid vertex (i0, j0) to
+// (i1, j1) (row i, column j; along a row, a column or the grid's diagonal), with its
+// direction constant.
+quad_detail::Curve grid_curve(int n, int i0, int j0, int i1, int j1) {
+  quad_detail::Curve c;
+  const int steps = std::max(std::abs(i1 - i0), std::abs(j1 - j0));
+  const Vec3 d = Vec3(j1 - j0, i1 - i0, 0).normalized();
+  for (int t = 0; t <= steps; ++t)
+    c.vertices.push_back((i0 + (i1 - i0) * t / steps) * n + j0 + (j1 - j0) * t / steps);
+  c.direction.assign(c.vertices.size(), d);
+  return c;
+}
+
+// A layout on a FlatGrid of n × n vertices: the square's four sides as curves, its corners
+// as nodes, and `inner` across it.
+quad_detail::Layout bounded_square_layout(const quad_detail::Surface& s, int n,
+                                          const quad_detail::Curve& inner) {
+  const int last = n - 1;
+  quad_detail::Layout layout = quad_detail::start_layout(s, {});
+  layout.curves = {grid_curve(n, 0, 0, 0, last), grid_curve(n, 0, last, last, last),
+                   grid_curve(n, last, last, last, 0), grid_curve(n, last, 0, 0, 0), inner};
+  for (int c = 0; c < 5; ++c) quad_detail::register_curve(s, layout, c);
+  for (int corner : {0, last, last * n + last, last * n}) layout.node[corner] = 1;
+  return layout;
+}
+
 // Quads of a cage in the xy plane that face down or have a corner under 1°.
 int bad_flat_quads(const QuadCage& cage) {
   int bad = 0;
@@ -687,21 +713,7 @@ TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   const FlatGrid flat(n, 0.1);
   const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
   auto vertex = [&](int i, int j) { return i * n + j; };
-  auto curve = [&](int i0, int j0, int i1, int j1) {
-    quad_detail::Curve c;
-    const int steps = std::max(std::abs(i1 - i0), std::abs(j1 - j0));
-    const Vec3 d = Vec3(j1 - j0, i1 - i0, 0).normalized();
-    for (int t = 0; t <= steps; ++t)
-      c.vertices.push_back(vertex(i0 + (i1 - i0) * t / steps, j0 + (j1 - j0) * t / steps));
-    c.direction.assign(c.vertices.size(), d);
-    return c;
-  };
-  quad_detail::Layout layout = quad_detail::start_layout(s, {});
-  layout.curves = {curve(0, 0, 0, 40), curve(0, 40, 40, 40), curve(40, 40, 40, 0),
-                   curve(40, 0, 0, 0), curve(20, 0, 20, 40)};
-  for (int c = 0; c < 5; ++c) quad_detail::register_curve(s, layout, c);
-  for (int corner : {vertex(0, 0), vertex(0, 40), vertex(40, 40), vertex(40, 0)})
-    layout.node[corner] = 1;
+  quad_detail::Layout layout = bounded_square_layout(s, n, grid_curve(n, 20, 0, 20, 40));
   layout.merge_parallel = 0.3;
   const int start = vertex(22, 0);
   std::vector<int> spokes;
@@ -738,25 +750,7 @@ TEST(Quad, AWedgePatchIsCutAcross) {
   const int n = 41;
   const FlatGrid flat(n, 0.1);
   const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  auto vertex = [&](int i, int j) { return i * n + j; };
-  auto curve = [&](int i0, int j0, int i1, int j1) {
-    quad_detail::Curve c;
-    const int steps = std::max(std::abs(i1 - i0), std::abs(j1 - j0));
-    const Vec3 d = Vec3(j1 - j0, i1 - i0, 0).normalized();
-    for (int t = 0; t <= steps; ++t)
-      c.vertices.push_back(vertex(i0 + (i1 - i0) * t / steps, j0 + (j1 - j0) * t / steps));
-    c.direction.assign(c.vertices.size(), d);
-    return c;
-  };
-  auto layout_of = [&] {
-    quad_detail::Layout layout = quad_detail::start_layout(s, {});
-    layout.curves = {curve(0, 0, 0, 40), curve(0, 40, 40, 40), curve(40, 40, 40, 0),
-                     curve(40, 0, 0, 0), curve(10, 0, 40, 30)};
-    for (int c = 0; c < 5; ++c) quad_detail::register_curve(s, layout, c);
-    for (int corner : {vertex(0, 0), vertex(0, 40), vertex(40, 40), vertex(40, 0)})
-      layout.node[corner] = 1;
-    return layout;
-  };
+  auto layout_of = [&] { return bounded_square_layout(s, n, grid_curve(n, 10, 0, 40, 30)); };
   auto worst_ratio = [](const quad_detail::PatchLayout& patches) {
     double worst = 1;
     for (const auto& patch : patches.patches)
