@@ -451,10 +451,12 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       }
       // A wedge: opposite sides whose targets differ several times over (a triangle read
       // as a rectangle) can only be balanced by squeezing the long one
-      // (QuadOptions::wedge_cut_ratio). It is cut from the middle of its boundary, once;
-      // if no cut traces, it stays as it is.
+      // (QuadOptions::wedge_cut_ratio). It is cut from the middle of its boundary, once,
+      // and only in the first half of the rounds (the others are for invalid patches); if
+      // no cut traces, it stays as it is.
       const double wedge_ratio = options.wedge_cut_ratio;
-      if (wedge_ratio > 0 && !wedge_tried.count(patch.faces.front())) {
+      if (wedge_ratio > 0 && 2 * round < options.max_fix_rounds &&
+          !wedge_tried.count(patch.faces.front())) {
         bool wedge = false;
         for (int pair = 0; pair < 2; ++pair) {
           double side[2] = {0, 0};
