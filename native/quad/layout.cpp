@@ -171,6 +171,12 @@ std::vector<int> shortest_open_arc(const Layout& layout, const PatchLayout& patc
 
 }  // namespace
 
+double side_target(const std::vector<Arc>& arcs, const Patch& patch, int k) {
+  double sum = 0;
+  for (auto& [a, reversed] : patch.sides[k]) sum += arcs[a].target;
+  return sum;
+}
+
 bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch) {
   std::vector<int> arcs;
   for (const auto& side : patches.patches[patch].sides)
@@ -459,10 +465,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           !wedge_tried.count(patch.faces.front())) {
         bool wedge = false;
         for (int pair = 0; pair < 2; ++pair) {
-          double side[2] = {0, 0};
-          for (int k = 0; k < 2; ++k)
-            for (auto& [a, reversed] : patch.sides[pair + 2 * k])
-              side[k] += out.arcs[a].target * options.density;
+          const double side[2] = {side_target(out.arcs, patch, pair) * options.density,
+                                  side_target(out.arcs, patch, pair + 2) * options.density};
           const double lo = std::min(side[0], side[1]), hi = std::max(side[0], side[1]);
           wedge |= hi >= 3 && hi > wedge_ratio * std::max(lo, 0.5);
         }

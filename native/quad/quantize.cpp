@@ -117,13 +117,12 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   // patch's width w = quads / length (the cost of an arc of target w at 0 edges).
   for (const Patch& patch : layout.patches)
     for (int pair = 0; pair < 2; ++pair) {
-      double across = 0, along = 0;
-      for (int side : {pair, pair + 2})
-        for (auto& [a, reversed] : patch.sides[side]) across += layout.arcs[a].target;
-      for (int side : {1 - pair, 3 - pair})
-        for (auto& [a, reversed] : patch.sides[side]) along += layout.arcs[a].target;
-      across *= 0.5 * options.density;
-      along *= 0.5 * options.density;
+      const double across = 0.5 * options.density *
+                            (side_target(layout.arcs, patch, pair) +
+                             side_target(layout.arcs, patch, pair + 2));
+      const double along = 0.5 * options.density *
+                           (side_target(layout.arcs, patch, 1 - pair) +
+                            side_target(layout.arcs, patch, 3 - pair));
       const double width = patch.quads * options.density * options.density / std::max(along, 1.0);
       if (width < 1 || across >= 1) continue;
       const int row = glp_add_rows(lp, 1);

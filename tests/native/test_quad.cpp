@@ -755,9 +755,8 @@ TEST(Quad, AWedgePatchIsCutAcross) {
     double worst = 1;
     for (const auto& patch : patches.patches)
       for (int pair = 0; pair < 2; ++pair) {
-        double side[2] = {0, 0};
-        for (int k = 0; k < 2; ++k)
-          for (auto& [a, reversed] : patch.sides[pair + 2 * k]) side[k] += patches.arcs[a].target;
+        const double side[2] = {quad_detail::side_target(patches.arcs, patch, pair),
+                                quad_detail::side_target(patches.arcs, patch, pair + 2)};
         const double lo = std::min(side[0], side[1]), hi = std::max(side[0], side[1]);
         if (hi >= 3) worst = std::max(worst, hi / std::max(lo, 0.5));
       }

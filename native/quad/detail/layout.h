@@ -139,6 +139,9 @@ struct PatchLayout {
   int removed_stretches = 0;
 };
 
+// Σ target (length / local size, at density 1) of the arcs on side k of `patch`.
+double side_target(const std::vector<Arc>& arcs, const Patch& patch, int k);
+
 // Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
 // disks with extra traces. Throws Error{StageFailure} if some patch stays invalid.
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
