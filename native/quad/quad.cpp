@@ -368,12 +368,16 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
     diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
                            " doublets (interior vertices of two quads) removed");
   *stats = measure_untangled(surface, checks, cage, diagnostics);
-  stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, 2.5);
-  if (stats->oversized_quads)
-    diagnostics->push_back("component " + std::to_string(c) + ": " +
-                           std::to_string(stats->oversized_quads) +
-                           " quads have an edge longer than 2.5x the target edge length "
-                           "(quantization squeezed patches whose opposite sides differ)");
+  constexpr double kOversized = 2.5;  // QuadStats::oversized_quads
+  stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, kOversized);
+  if (stats->oversized_quads) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "component %d: %d quads have an edge longer than %gx the target edge length "
+                  "(quantization squeezed patches whose opposite sides differ)",
+                  c, stats->oversized_quads, kOversized);
+    diagnostics->push_back(text);
+  }
   stats->patches = static_cast<int>(patches.patches.size());
   stats->separatrices = layout.separatrices;
   stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
