@@ -8,9 +8,14 @@
 // make a rectangle (best_corners; options.fit_corners) or, the older way, by re-reading
 // the most ambiguous angle one at a time and, failing that, taking the four sharpest turns.
 // A valid patch whose opposite sides differ several times over (a wedge) gets one more
-// cut across (options.wedge_cut_ratio).
+// cut across (options.wedge_cut_ratio). Two curves meeting at under 45° are a cusp: the
+// sector between them reads 0 quarter turns (options.cusp_corners), and a thin patch
+// between them is a triangle with an empty side, which quantization collapses onto one
+// curve. At a singular vertex the angles are the curves' own, scaled to the singularity's
+// quarter turns.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -89,6 +94,50 @@ void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
   }
 }
 
+}  // namespace
+
+// Direction in which the curve through halfedge h leaves from(h): towards the point a few
+// mesh edges along it (fewer if a node comes first), in the vertex's tangent plane.
+static Vec3 curve_chord(const Surface& s, const Layout& layout, int h) {
+  const int v = s.from(h);
+  const Curve& curve = layout.curves[layout.edge_curve[h >> 1]];
+  const std::vector<int>& vs = curve.vertices;
+  const int n = static_cast<int>(vs.size());
+  int at = -1, step = 0;
+  for (int i = 0; i < n && at < 0; ++i) {
+    if (vs[i] != v) continue;
+    const int next = curve.closed ? (i + 1) % n : i + 1, prev = curve.closed ? (i + n - 1) % n : i - 1;
+    if (next < n && vs[next] == s.to(h)) at = i, step = 1;
+    else if (prev >= 0 && vs[prev] == s.to(h)) at = i, step = -1;
+  }
+  int w = s.to(h);
+  for (int k = 1, i = at; at >= 0 && k <= 3; ++k) {
+    i += step;
+    if (curve.closed) i = (i + n) % n;
+    if (i < 0 || i >= n) break;
+    w = vs[i];
+    if (layout.node[w]) break;
+  }
+  return s.tangent(v, s.point[w] - s.point[v]);
+}
+
+// (quad/detail/layout.h)
+double sector_angle(const Surface& s, const Layout& layout, int h_out, int h_in, int valence) {
+  const int v = s.from(h_out);
+  const Vec3& n = s.vertex_normal[v];
+  if (valence > 0)
+    return ccw_angle(curve_chord(s, layout, h_out), curve_chord(s, layout, h_in ^ 1), n) *
+           valence / 4;
+  const double angle = ccw_angle(layout.halfedge_dir[h_out], layout.halfedge_dir[h_in ^ 1], n);
+  constexpr double kAmbiguous = 0.2;  // radians either side of 0 ≡ 2π
+  if (angle > kAmbiguous && angle < 2 * kPi - kAmbiguous) return angle;
+  const double chord = ccw_angle(curve_chord(s, layout, h_out), curve_chord(s, layout, h_in ^ 1), n);
+  if (chord < kPi) return std::max(angle > kPi ? angle - 2 * kPi : angle, 1e-6);
+  return angle < kPi ? 2 * kPi : angle;
+}
+
+namespace {
+
 // The next patch-boundary halfedge after h: rotate around to(h) inside the patch.
 int next_on_boundary(const Surface& s, const Layout& layout, int h) {
   int c = s.mesh.next_halfedge_handle(s.mesh.halfedge_handle(h)).idx();
@@ -100,40 +149,52 @@ int next_on_boundary(const Surface& s, const Layout& layout, int h) {
 // The four corners of a disk patch among the nodes of its boundary cycle that best make a
 // rectangle: corner angles near a quarter turn, other nodes near straight, and the two
 // pairs of opposite sides of nearly equal length (in target edges, as quantization needs
-// them equal). Exhaustive over the C(m, 4) choices of m nodes (m ≤ 40 here). Returns one
-// flag per node, or nothing when there are fewer than four nodes or too many.
-std::vector<char> best_corners(const std::vector<Corner>& nodes, const std::vector<double>& after,
-                               double* best_cost) {
+// them equal). A cusp (read 0) stays one and counts as two corners with an empty side
+// between them, so 4 − 2 · cusps corners are chosen. Exhaustive over the choices among the
+// m nodes (m ≤ 40 here). Returns the quarters of every node (0, 1 or 2), or nothing when
+// there are too few nodes or too many.
+std::vector<int> best_corners(const std::vector<Corner>& nodes, const std::vector<double>& after,
+                              double* best_cost) {
   const int m = static_cast<int>(nodes.size());
-  if (m < 4 || m > 40) return {};
-  auto cost_of = [&](const int (&c)[4]) {
-    double cost = 0;
-    for (int i = 0, k = 0; i < m; ++i) {
-      const bool corner = k < 4 && c[k] == i;
-      k += corner;
-      cost += std::abs(nodes[i].angle - (corner ? kPi / 2 : kPi)) / (kPi / 2);
+  int cusps = 0;
+  for (const Corner& k : nodes) cusps += k.quarters == 0;
+  const int wanted = 4 - 2 * cusps;
+  std::vector<int> best;
+  *best_cost = 1e300;
+  if (wanted < 0 || m - cusps < wanted || m > 40) return best;
+  std::vector<int> quarters(m, 2);
+  for (int i = 0; i < m; ++i)
+    if (nodes[i].quarters == 0) quarters[i] = 0;
+  auto cost_of = [&]() {
+    double cost = 0, side[4] = {0, 0, 0, 0};
+    int first = 0;
+    while (quarters[first] == 2) ++first;
+    for (int t = 0, k = -1; t < m; ++t) {
+      const int i = (first + t) % m;
+      const double want = quarters[i] * kPi / 2;
+      cost += std::abs(nodes[i].angle - want) / (kPi / 2);
+      k += quarters[i] < 2 ? 2 - quarters[i] : 0;
+      side[k] += after[i];
     }
-    double side[4] = {0, 0, 0, 0};
-    for (int k = 0; k < 4; ++k)
-      for (int i = c[k]; i != c[(k + 1) % 4]; i = (i + 1) % m) side[k] += after[i];
     for (int k = 0; k < 2; ++k)
       cost += 2 * std::abs(side[k] - side[k + 2]) / std::max(side[k] + side[k + 2], 1e-9);
     return cost;
   };
-  std::vector<char> best;
-  *best_cost = 1e300;
-  int c[4];
-  for (c[0] = 0; c[0] < m; ++c[0])
-    for (c[1] = c[0] + 1; c[1] < m; ++c[1])
-      for (c[2] = c[1] + 1; c[2] < m; ++c[2])
-        for (c[3] = c[2] + 1; c[3] < m; ++c[3]) {
-          const double cost = cost_of(c);
-          if (cost < *best_cost) {
-            *best_cost = cost;
-            best.assign(m, 0);
-            for (int k : c) best[k] = 1;
-          }
-        }
+  // Every choice of `left` more corners among the non-cusp nodes from index i on.
+  std::function<void(int, int)> choose = [&](int i, int left) {
+    if (left == 0) {
+      const double cost = cost_of();
+      if (cost < *best_cost) *best_cost = cost, best = quarters;
+      return;
+    }
+    for (int j = i; j <= m - left; ++j)
+      if (quarters[j] == 2) {
+        quarters[j] = 1;
+        choose(j + 1, left - 1);
+        quarters[j] = 2;
+      }
+  };
+  choose(0, wanted);
   return best;
 }
 
@@ -184,11 +245,32 @@ bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, i
   return remove_stretch(s, layout, shortest_open_arc(layout, patches, arcs));
 }
 
+int straighten_cusps(Layout& layout, const PatchLayout& patches, int patch) {
+  int taken = 0;
+  for (int h : patches.patches[patch].cusps) taken += layout.no_cusp.insert(h).second;
+  if (taken) return taken;
+  std::set<int> arcs;
+  for (const auto& side : patches.patches[patch].sides)
+    for (auto& [a, reversed] : side) arcs.insert(a);
+  for (const Patch& other : patches.patches) {
+    if (other.cusps.empty()) continue;
+    bool shares = &other == &patches.patches[patch];
+    for (const auto& side : other.sides)
+      for (auto& [a, reversed] : side) shares |= arcs.count(a) > 0;
+    if (shares)
+      for (int h : other.cusps) taken += layout.no_cusp.insert(h).second;
+  }
+  return taken;
+}
+
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
                           Diagnostics& diagnostics) {
   const std::string who = "component " + std::to_string(s.component);
   std::map<int, int> quarter_override;  // by the sector's outgoing halfedge
   std::set<int> wedge_tried;             // wedge patches cut once, by their first face
+  std::map<int, int> singular_valence;   // traced singular vertex → its separatrix count
+  for (size_t i = 0; i < layout.attractors.size() && i < layout.attractor_directions.size(); ++i)
+    singular_valence[layout.attractors[i]] = static_cast<int>(layout.attractor_directions[i].size());
   PatchLayout out;
   for (int round = 0;; ++round) {
     build_arcs(s, layout, out);
@@ -317,10 +399,14 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           const int h_out = cycle.halfedges[i], h_in = cycle.halfedges[(i + n - 1) % n];
           const int v = s.from(h_out);
           if (!layout.node[v]) continue;
-          Corner corner{h_out, h_in, 0, 2};
-          corner.angle = ccw_angle(layout.halfedge_dir[h_out], layout.halfedge_dir[h_in ^ 1],
-                                   s.vertex_normal[v]);
-          corner.quarters = std::clamp(int(std::lround(corner.angle / (kPi / 2))), 1, 3);
+          const auto singular = singular_valence.find(v);
+          Corner corner{h_out, h_in,
+                        sector_angle(s, layout, h_out, h_in,
+                                     singular == singular_valence.end() ? 0 : singular->second),
+                        2};
+          corner.quarters = std::clamp(int(std::lround(corner.angle / (kPi / 2))),
+                                       options.cusp_corners ? 0 : 1, 3);
+          if (corner.quarters == 0 && layout.no_cusp.count(h_out)) corner.quarters = 1;
           if (h_out == (h_in ^ 1)) corner.quarters = 4;  // a dangling end: full turn
           cycle.nodes.push_back(corner);
         }
@@ -332,7 +418,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           Corner& b = cycle.nodes[(i + 1) % m];
           const int arc = out.halfedge_arc[a.halfedge_out] / 2;
           if (layout.curves[out.arcs[arc].curve].link && a.quarters + b.quarters == 4 &&
-              a.quarters != 2)
+              (a.quarters == 1 || a.quarters == 3))
             a.quarters = b.quarters = 2;
         }
         for (Corner& k : cycle.nodes) {
@@ -415,7 +501,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       if (turning != 4) {
         // The best rectangle among the patch's nodes (best_corners).
         double cost = 0;
-        const std::vector<char> best = best_corners(cycle.nodes, after, &cost);
+        const std::vector<int> best = best_corners(cycle.nodes, after, &cost);
         if (best.empty()) {
           fixes.push_back(middle_cuts(cycles));
           force_corners(cycle, fixes.back());
@@ -424,7 +510,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           continue;
         }
         for (size_t i = 0; i < best.size(); ++i)
-          quarter_override[cycle.nodes[i].halfedge_out] = best[i] ? 1 : 2;
+          quarter_override[cycle.nodes[i].halfedge_out] = best[i];
         ++out.recornered;
         --p;  // re-examine the same patch with the new reading
         continue;
@@ -443,17 +529,53 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         for (int i = 0; i < n; ++i)
           if (is_node[i]) quarters[i] = cycle.nodes[k++].quarters;
       }
+      // A cusp (quarters 0) is two corners at one node, with an empty side between them.
       int start = 0;
-      while (quarters[start] != 1) ++start;
+      while (quarters[start] > 1) ++start;
       patch.sides.assign(4, {});
       int side = -1;
       for (int t = 0; t < n; ++t) {
         const int i = (start + t) % n;
-        if (quarters[i] == 1) ++side;
+        if (quarters[i] <= 1) side += 2 - quarters[i];
         if (is_node[i]) {
           const int code = out.halfedge_arc[cycle.halfedges[i]];
           patch.sides[side].push_back({code / 2, (code & 1) != 0});
         }
+      }
+      // A cusp patch collapses (fill.cpp) onto one curve, so it must be thin: the side
+      // across from its empty side under one target edge (interior arcs, which may quantize
+      // to 0) and the patch under half a target edge wide on average (area over length; a
+      // thin triangle on a base of one edge is that wide), or the collapse squeezes the
+      // quads beside it. Nor may it touch the component's border (a loop: the collapse glues
+      // its two long sides onto each other, and a chain must stay on its loop). Otherwise
+      // its cusps read as quarter turns and it is examined again.
+      bool cusp = false, collapsible = true;
+      for (int k = 0; k < 4; ++k)
+        if (patch.sides[k].empty()) {
+          cusp = true;
+          const double d = options.density;
+          const double along = 0.5 * d * (side_target(out.arcs, patch, (k + 1) % 4) +
+                                           side_target(out.arcs, patch, (k + 3) % 4));
+          collapsible &= side_target(out.arcs, patch, (k + 2) % 4) * d < 1 &&
+                         patch.quads * d * d / std::max(along, 1.0) < 0.5;
+        }
+      if (cusp) {
+        for (const auto& arcs : patch.sides)
+          for (auto& [a, reversed] : arcs) {
+            const std::vector<int>& vs = out.arcs[a].vertices;
+            const int h = s.mesh.find_halfedge(s.mesh.vertex_handle(vs[0]),
+                                               s.mesh.vertex_handle(vs[1])).idx();
+            collapsible &= s.in(s.face(h)) && s.in(s.face(h ^ 1));
+          }
+        if (!collapsible) {
+          for (const Corner& k : cycle.nodes)
+            if (k.quarters == 0) quarter_override[k.halfedge_out] = 1;
+          ++out.recornered;
+          --p;
+          continue;
+        }
+        for (const Corner& k : cycle.nodes)
+          if (k.quarters == 0) patch.cusps.push_back(k.halfedge_out);
       }
       // A wedge: opposite sides whose targets differ several times over (a triangle read
       // as a rectangle) can only be balanced by squeezing the long one
@@ -461,7 +583,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       // and only in the first half of the rounds (the others are for invalid patches); if
       // no cut traces, it stays as it is.
       const double wedge_ratio = options.wedge_cut_ratio;
-      if (wedge_ratio > 0 && 2 * round < options.max_fix_rounds &&
+      if (!cusp && wedge_ratio > 0 && 2 * round < options.max_fix_rounds &&
           !wedge_tried.count(patch.faces.front())) {
         bool wedge = false;
         for (int pair = 0; pair < 2; ++pair) {
@@ -517,6 +639,11 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     diagnostics.push_back(who + ": " + std::to_string(out.removed_stretches) +
                           " stretches of separatrices removed (dangling, or enclosing a patch "
                           "too small to cut)");
+  for (const Patch& patch : out.patches) out.cusps += !patch.cusps.empty();
+  if (out.cusps)
+    diagnostics.push_back(who + ": " + std::to_string(out.cusps) +
+                          " cusp patches (curves converging at under 45°) collapsed onto one "
+                          "curve");
   if (out.recornered)
     diagnostics.push_back(who + ": " + std::to_string(out.recornered) +
                           " patch corners re-read to make four-sided patches");

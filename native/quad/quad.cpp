@@ -327,23 +327,27 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   quad_detail::PatchLayout patches;
   std::string failure;
   bool relaxed = false;
-  int merged = 0;
+  int merged = 0, straightened = 0;
   Diagnostics layout_diagnostics;  // of the last round only
   for (int round = 0;; ++round) {
     layout_diagnostics.clear();
     patches = quad_detail::build_patches(surface, layout, options, layout_diagnostics);
     if (quad_detail::quantize(patches, options, &failure, &relaxed)) break;
-    int now = 0;
-    if (round < options.max_balance_rounds)
-      for (int p : quad_detail::unbalanced_patches(patches))
-        now += quad_detail::merge_patch(surface, layout, patches, p);
-    GENBREP_CHECK(now > 0, Code::StageFailure,
+    int now = 0, taken = 0;
+    // Cusp readings at an unbalanced patch are taken back first (always: they are readings,
+    // not changes to the layout); only where there are none are the patches merged.
+    const std::vector<int> unbalanced = quad_detail::unbalanced_patches(patches);
+    for (int p : unbalanced) taken += quad_detail::straighten_cusps(layout, patches, p);
+    if (!taken && round < options.max_balance_rounds)
+      for (int p : unbalanced) now += quad_detail::merge_patch(surface, layout, patches, p);
+    GENBREP_CHECK(now + taken > 0, Code::StageFailure,
                   "quad: component " + std::to_string(c) + ": quantization of " +
                       std::to_string(patches.patches.size()) + " patches: " + failure +
                       (merged ? " (after merging " + std::to_string(merged) +
                                     " unbalanced patches)"
                               : std::string()));
     merged += now;
+    straightened += taken;
   }
   // Different choices often give the same quantized layout: it is filled only once.
   std::size_t fingerprint = patches.arcs.size();
@@ -360,6 +364,11 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   if (merged)
     diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
                            " patches whose sides could not balance merged with a neighbour");
+  if (straightened)
+    diagnostics->push_back("component " + std::to_string(c) + ": " +
+                           std::to_string(straightened) +
+                           " cusp corners read as quarter turns after all, so that the "
+                           "layout's sides balance");
   if (relaxed)
     diagnostics->push_back("component " + std::to_string(c) +
                            ": the layout's sides balance only with some interior arcs at 0 edges");

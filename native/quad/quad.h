@@ -77,6 +77,13 @@ struct QuadOptions {
   // Patches whose angles do not give four corners: choose the four nodes that best make a
   // rectangle (angles and opposite side lengths), or re-read one angle at a time (false).
   bool fit_corners = true;
+  // Two curves meeting at a node at less than 45° are a cusp: field lines converging, not a
+  // corner. The sector between them reads 0 quarter turns, so the patch there is a
+  // triangle with an empty side, which quantization collapses onto one curve, instead of a
+  // triangle that needs a forced fourth corner (a valence-3 vertex beside a valence-5
+  // one). Only where that patch is small and off the loops; false: such sectors read as
+  // quarter turns.
+  bool cusp_corners = true;
   // A four-cornered patch one of whose pairs of opposite sides differs by more than this
   // factor (the longer at least 3 cage edges) is a wedge, a triangle read as a rectangle:
   // quantization could balance it only by squeezing the longer side, so it gets one more

@@ -174,10 +174,13 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
     const int r = glp_add_rows(lp, 1);
     glp_set_row_bnds(lp, r, GLP_FX, 0, 0);
     for (auto& [a, c] : row.coefficients) ia.push_back(r), ja.push_back(a + 1), ar.push_back(c);
-    const int slack = glp_add_cols(lp, 2);  // s⁺ − s⁻, both priced 1
+    // s⁺ − s⁻, priced 1, or a quarter at a cusp patch: a cusp reading is the cheapest
+    // thing to take back (straighten_cusps), so the imbalance lands there when it can.
+    const int slack = glp_add_cols(lp, 2);
+    const double price = layout.patches[row.patch].cusps.empty() ? 1.0 : 0.25;
     for (int k = 0; k < 2; ++k) {
       glp_set_col_bnds(lp, slack + k, GLP_LO, 0, 0);
-      glp_set_obj_coef(lp, slack + k, 1);
+      glp_set_obj_coef(lp, slack + k, price);
       ia.push_back(r), ja.push_back(slack + k), ar.push_back(k ? -1.0 : 1.0);
     }
   }

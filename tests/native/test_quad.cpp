@@ -788,6 +788,87 @@ TEST(Quad, AWedgePatchIsCutAcross) {
   EXPECT_LT(worst_ratio(patches), 3.5);
 }
 
+// Sector angles where the curves' field tangents say nothing: two curves leaving a vertex
+// with the same tangent are a cusp (≈ 0) on the side where their edges are 45° apart and
+// a full turn on the other; at a singular vertex of valence 5 the edges' 90° is 112.5°
+// (5 quarter turns fill the full turn there), whatever the tangents say.
+TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
+  const int n = 21;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const int center = 10 * n + 10;
+  quad_detail::Layout layout = quad_detail::start_layout(s, {});
+  layout.curves = {grid_curve(n, 10, 10, 10, 20), grid_curve(n, 10, 10, 20, 20),
+                   grid_curve(n, 10, 10, 0, 10)};
+  for (auto& c : layout.curves) c.direction.assign(c.vertices.size(), Vec3(1, 0, 0));
+  for (int c = 0; c < 3; ++c) quad_detail::register_curve(s, layout, c);
+  auto halfedge = [&](int from, int to) {
+    return flat.mesh.find_halfedge(flat.mesh.vertex_handle(from), flat.mesh.vertex_handle(to)).idx();
+  };
+  const int right = halfedge(center, center + 1), diagonal = halfedge(center, center + n + 1),
+            down = halfedge(center, center - n);
+  constexpr double kPi = 3.14159265358979323846;
+  // Sector from `out` counter-clockwise to the curve that `in ^ 1` leaves along.
+  EXPECT_LT(quad_detail::sector_angle(s, layout, right, diagonal ^ 1, 0), 0.01);
+  EXPECT_NEAR(quad_detail::sector_angle(s, layout, diagonal, right ^ 1, 0), 2 * kPi, 1e-9);
+  EXPECT_NEAR(quad_detail::sector_angle(s, layout, down, right ^ 1, 5), 0.5 * kPi * 5 / 4, 1e-6);
+  EXPECT_NEAR(quad_detail::sector_angle(s, layout, right, diagonal ^ 1, 5), 0.25 * kPi * 5 / 4, 1e-6);
+}
+
+// A cusp: a curve converging onto another at under 45° leaves a thin triangle between
+// them. On a flat 4 × 4 square bounded by four curves, with a curve H across it at y = 2, a
+// curve V up it at x = 1 and a curve C that leaves V at y = 1.4 and rises 1 in 3 onto H at
+// x = 2.8 (an 18° cusp), at 1.5 × the density (the triangle is nearly one cage edge
+// across): read as a cusp, the triangle collapses onto H without any cut and every interior
+// cage vertex has valence 4. Read as a quarter turn (cusp_corners off), the triangle has
+// three corners and needs cuts and re-read corners: two irregular vertices.
+TEST(Quad, ACuspPatchCollapsesOntoOneCurve) {
+  const int n = 41;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  quad_detail::Curve c;
+  for (int i = 14, j = 10; i <= 20; ++i, j += 3) {
+    c.vertices.push_back(i * n + j);
+    if (i < 20) c.vertices.push_back(i * n + j + 1), c.vertices.push_back(i * n + j + 2);
+  }
+  c.direction.assign(c.vertices.size(), Vec3(3, 1, 0).normalized());
+  struct Result { int cusps, irregular; size_t curves; };
+  auto run = [&](const QuadOptions& options) {
+    quad_detail::Layout layout = bounded_square_layout(s, n, grid_curve(n, 20, 0, 20, 40));
+    layout.curves.push_back(grid_curve(n, 0, 10, 40, 10));
+    layout.curves.push_back(c);
+    for (int k = 5; k < 7; ++k) quad_detail::register_curve(s, layout, k);
+    Diagnostics diagnostics;
+    quad_detail::PatchLayout patches = quad_detail::build_patches(s, layout, options, diagnostics);
+    std::string failure;
+    bool relaxed = false;
+    EXPECT_TRUE(quad_detail::quantize(patches, options, &failure, &relaxed)) << failure;
+    const QuadCage cage = quad_detail::fill_patches(s, layout, patches, diagnostics);
+    EXPECT_EQ(bad_flat_quads(cage), 0);
+    std::map<int, int> quads_at;
+    for (int q = 0; q < cage.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) ++quads_at[cage.quads(q, k)];
+    Result r{patches.cusps, 0, layout.curves.size()};
+    for (auto& [v, count] : quads_at) {
+      const double x = cage.vertices(v, 0), y = cage.vertices(v, 1);
+      const bool inside = x > 1e-6 && x < 4 - 1e-6 && y > 1e-6 && y < 4 - 1e-6;
+      r.irregular += inside && count != 4;
+    }
+    return r;
+  };
+  QuadOptions on;
+  on.density = 1.5;
+  const Result cusp = run(on);
+  EXPECT_EQ(cusp.cusps, 1);
+  EXPECT_EQ(cusp.irregular, 0);
+  EXPECT_EQ(cusp.curves, 7u);  // no cut traced
+  QuadOptions off = on;
+  off.cusp_corners = false;
+  const Result quarter = run(off);
+  EXPECT_EQ(quarter.cusps, 0);
+  EXPECT_GT(quarter.irregular, 0);
+}
+
 TEST(Quad, TwoArchesGiveTwoValidCages) {
   const Partitioned r = relaxed(partition_scene(two_arches_scene(0.05)));
   int problems = 0;

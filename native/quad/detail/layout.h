@@ -5,6 +5,7 @@
 #include <array>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,9 @@ struct Layout {
   double length_cap = 0;             // traces cross others only before this length
   double merge_parallel = 0;         // join a nearly parallel curve closer than this × size
   int parallel_joins = 0;
+  // Cusp sectors (by outgoing halfedge) read as quarter turns after all, because the
+  // layout did not balance with them (straighten_cusps).
+  std::set<int> no_cusp;
   std::vector<int> attractors;       // traced singular vertices (separatrices end on them)
   // Per attractor: its separatrix directions (a walk heads for it only along a free one).
   std::vector<std::vector<Vec3>> attractor_directions;
@@ -115,6 +119,12 @@ bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int las
 void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& options,
                         Diagnostics& diagnostics);
 
+// The angle (radians, counter-clockwise) of the patch sector at from(h_out) between its
+// boundary halfedges h_out (leaving) and h_in (entering), read from the curves' tangents,
+// or from the curves themselves where the tangents nearly coincide (a cusp ≈ 0 against a
+// full turn) and at a singular vertex of `valence` > 0 (scaled by valence / 4).
+double sector_angle(const Surface& s, const Layout& layout, int h_out, int h_in, int valence);
+
 struct Arc {
   std::vector<int> vertices;  // node to node along a curve
   int curve = -1;
@@ -128,6 +138,7 @@ struct Patch {
   // Four sides counter-clockwise (patch on the left); each a list of (arc, reversed).
   std::vector<std::vector<std::pair<int, bool>>> sides;
   double quads = 0;  // Σ area / (size_u · size_v) over its faces: the quads it holds at density 1
+  std::vector<int> cusps;  // outgoing boundary halfedges of its cusp corners (empty sides)
 };
 
 struct PatchLayout {
@@ -136,6 +147,7 @@ struct PatchLayout {
   std::vector<Patch> patches;
   std::vector<std::vector<int>> loop_arcs;  // per curve that is a loop: its arcs in order
   int recornered = 0;
+  int cusps = 0;  // patches with a cusp corner (an empty side), collapsed by quantization
   int removed_stretches = 0;
 };
 
@@ -159,6 +171,10 @@ std::vector<int> unbalanced_patches(const PatchLayout& patches);
 // Merges `patch` with a neighbour by taking the shortest separatrix arc on its boundary off
 // the layout (build_patches is then run again); false if it has none left to remove.
 bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch);
+// Takes back the cusp readings of `patch`, or if it has none, of every cusp patch that
+// shares an arc with it (Layout::no_cusp; build_patches is then run again); returns how
+// many were taken back.
+int straighten_cusps(Layout& layout, const PatchLayout& patches, int patch);
 
 // Closest points on the component's triangles (locate.cpp), with the normal of the face hit.
 class ComponentLocator {
