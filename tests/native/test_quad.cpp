@@ -437,6 +437,30 @@ TEST(Quad, UnbalancedPatchIsNamed) {
   EXPECT_TRUE(quad_detail::unbalanced_patches(layout).empty());
 }
 
+// An imbalance between a cusp patch and a plain one lands on the cusp patch, and
+// straighten_cusps takes its cusp back. Arcs: e (0) shared by both patches, c (1), b (2),
+// d (3), f (4), g (5) on one patch each (so at least 1 edge). The plain patch needs
+// e = c ≥ 1; the cusp patch (an empty side across from e) needs e = 0.
+TEST(Quad, AnImbalanceLandsOnACuspPatchWhichIsStraightened) {
+  quad_detail::PatchLayout layout;
+  layout.arcs.resize(6);
+  for (auto& arc : layout.arcs) arc.target = 0.8, arc.length = 0.8;
+  quad_detail::Patch plain, cusp;
+  plain.sides = {{{0, false}}, {{2, false}}, {{1, false}}, {{3, false}}};
+  cusp.sides = {{}, {{4, false}}, {{0, true}}, {{5, false}}};
+  cusp.cusps = {17};
+  layout.patches = {plain, cusp};
+  EXPECT_EQ(quad_detail::unbalanced_patches(layout), std::vector<int>{1});
+  quad_detail::Layout curves;
+  EXPECT_EQ(quad_detail::straighten_cusps(curves, layout, 1), 1);
+  EXPECT_EQ(curves.no_cusp, std::set<int>{17});
+  EXPECT_EQ(quad_detail::straighten_cusps(curves, layout, 1), 0);  // already taken back
+  // The plain patch has no cusp of its own: its cusp neighbour (sharing arc e) is taken back.
+  quad_detail::Layout again;
+  EXPECT_EQ(quad_detail::straighten_cusps(again, layout, 0), 1);
+  EXPECT_EQ(again.no_cusp, std::set<int>{17});
+}
+
 // A patch wider than a cage edge keeps a row of quads even when the arcs across it are
 // short (two separatrices that meet a third at nearby nodes): patch 0 is 10 long and
 // holds 30 quads (3 wide), but its ends are arcs of target 0.2. Patch 1 shares all its
