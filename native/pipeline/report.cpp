@@ -220,6 +220,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
                    {"interior_valence4_fraction", s.interior_valence4_fraction()},
                    {"boundary_valence3_fraction", s.boundary_valence3_fraction()},
                    {"irregular_vertices", s.irregular_vertices},
+                   {"irregular_vertices_off_singularities", s.irregular_off_singularities},
                    {"mean_angle_deviation_degrees", s.mean_angle_deviation_deg},
                    {"max_angle_deviation_degrees", s.max_angle_deviation_deg},
                    {"flipped_quads", s.flipped_quads},

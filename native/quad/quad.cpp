@@ -87,6 +87,26 @@ int oversized_quads(const CageChecks& checks, const QuadCage& cage, double densi
   return oversized;
 }
 
+int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
+                                const std::vector<Vec3>& singular, double density) {
+  std::vector<int> quads_at(cage.vertices.rows(), 0);
+  for (int q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) ++quads_at[cage.quads(q, k)];
+  for (const auto& chain : cage.boundary_chains)
+    for (int v : chain) quads_at[v] = 4;  // boundary vertices are not counted
+  int off = 0;
+  for (int v = 0; v < static_cast<int>(quads_at.size()); ++v) {
+    if (quads_at[v] == 4 || quads_at[v] == 0) continue;
+    const Vec3 p = cage.vertices.row(v).transpose();
+    const int near = checks.normals.nearest_vertex(p);
+    const double size = near >= 0 ? checks.surface.vertex_size[near] / density : 0;
+    bool close = false;
+    for (const Vec3& s : singular) close |= (s - p).norm() <= size;
+    off += !close;
+  }
+  return off;
+}
+
 bool DesignNormals::flipped(const Vec3 (&c)[4]) const {
   const Vec3 n = nearest_normal(0.25 * (c[0] + c[1] + c[2] + c[3]));
   return n.squaredNorm() > 0 && (c[2] - c[0]).cross(c[3] - c[1]).dot(n) <= 0;
@@ -547,6 +567,9 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   const quad_detail::Surface& surface = refined_surface ? *refined_surface : coarse;
   // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
   const quad_detail::CageChecks checks(coarse);
+  std::vector<Vec3> singular;  // the component's field singularities (QuadStats)
+  for (const auto& point : field.singularities)
+    if (point.component == c) singular.push_back(coarse.point[point.vertex]);
   std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
   int best = -1;
@@ -616,6 +639,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                                  ": the cage uses the layout with " + variants[best].what +
                                  " (" + why + ")");
     }
+    best_stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
+        checks, best_cage, singular, variants[best].options.density);
     out->cages.push_back(std::move(best_cage));
     out->stats.push_back(best_stats);
     return;
@@ -653,6 +678,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       " x the target) split into quads, not aligned with the field, "
       "with irregular vertices wherever triangles could not be paired");
   out->diagnostics.insert(out->diagnostics.end(), untangled.begin(), untangled.end());
+  stats.irregular_off_singularities =
+      quad_detail::irregular_off_singularities(checks, cage, singular, variants[0].options.density);
   out->cages.push_back(std::move(cage));
   out->stats.push_back(stats);
 }

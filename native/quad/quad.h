@@ -133,6 +133,10 @@ struct QuadStats {
   // Quads with an edge longer than 2.5× the local target edge length (quantization
   // squeezed their patch; quad_detail::oversized_quads).
   int oversized_quads = 0;
+  // Interior vertices of valence ≠ 4 farther than one local target edge from every field
+  // singularity of the component: irregular vertices the layout put where the field has
+  // none (quad_detail::irregular_off_singularities).
+  int irregular_off_singularities = 0;
   double seconds = 0;
   double interior_valence4_fraction() const {
     return interior_vertices ? double(interior_valence4) / interior_vertices : 1.0;

@@ -683,23 +683,29 @@ TEST(Quad, IrregularPairsAreCancelledByADiagonalCollapse) {
 }
 
 // An edge whose rotation left two valence-3 and two valence-5 vertices is rotated back.
-TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+// The regular 7 × 7 flat cage with one edge rotated: around the edge u = (2, 3) –
+// w = (3, 3), the quads above, (u, w, a, b), and below, (c, d, w, u), become (c, d, w, a)
+// and (a, b, u, c); u and w move apart to keep both convex. u and w get valence 3, a and
+// c valence 5.
+QuadCage edge_rotated_flat_cage() {
   const int m = 7;
-  QuadCage regular = regular_flat_cage(m);
-  EXPECT_EQ(quad_detail::rotate_edges_for_pairs(checks, regular), 0);
-  // Around the edge u = (2, 3) – w = (3, 3): the quads above, (u, w, a, b), and below,
-  // (c, d, w, u), become (c, d, w, a) and (a, b, u, c); u and w move apart to keep both
-  // convex.
   const int u = 3 * m + 2, w = 3 * m + 3, a = 4 * m + 3, b = 4 * m + 2, c = 2 * m + 2,
             d = 2 * m + 3;
-  QuadCage rotated = regular;
+  QuadCage rotated = regular_flat_cage(m);
   rotated.vertices.row(u) << 1.7, 3, 0;
   rotated.vertices.row(w) << 3.3, 3, 0;
   rotated.quads.row(3 * (m - 1) + 2) << c, d, w, a;
   rotated.quads.row(2 * (m - 1) + 2) << a, b, u, c;
+  return rotated;
+}
+
+TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
+  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  QuadCage regular = regular_flat_cage(7);
+  EXPECT_EQ(quad_detail::rotate_edges_for_pairs(checks, regular), 0);
+  QuadCage rotated = edge_rotated_flat_cage();
   ASSERT_EQ(interior_valences(rotated), (std::map<int, int>{{3, 2}, {4, 21}, {5, 2}}));
   ASSERT_EQ(bad_flat_quads(rotated), 0);
   QuadCage cancelled = rotated;
@@ -725,6 +731,23 @@ TEST(Quad, QuadsStretchedBeyondTheTargetSizeAreCounted) {
   for (int i = 0; i < m; ++i) cage.vertices(i * m + m - 1, 0) = 8;  // last column: x 5 → 8
   EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 1.0, 2.5), m - 1);
   EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 0.5, 2.5), 0);
+}
+
+// Irregular vertices away from the field's singularities are counted: the edge-rotated
+// cage has two valence-3 vertices at (1.7, 3) and (3.3, 3) and two valence-5 ones at (2, 2)
+// and (3, 4); with target size 1, a singular point at (3, 4) covers the valence-5 vertex
+// there only; at density 0.5 (target 2) it also covers both valence-3 vertices, but not
+// (2, 2), 2.24 away.
+TEST(Quad, IrregularVerticesAwayFromSingularitiesAreCounted) {
+  const FlatGrid flat(31, 0.2);  // the square [0, 6]², target size 1
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, regular_flat_cage(7), {}, 1.0), 0);
+  const QuadCage rotated = edge_rotated_flat_cage();
+  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, rotated, {}, 1.0), 4);
+  const std::vector<Vec3> singular = {Vec3(3, 4, 0)};
+  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, rotated, singular, 1.0), 3);
+  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, rotated, singular, 0.5), 1);
 }
 
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four

@@ -222,6 +222,11 @@ struct CageChecks {
 // (quad.cpp).
 int oversized_quads(const CageChecks& checks, const QuadCage& cage, double density,
                     double factor);
+// Interior vertices of `cage` (not on a boundary chain) of valence ≠ 4 farther than one
+// local target edge (the design's size at the nearest vertex, over `density`) from every
+// point of `singular`.
+int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
+                                const std::vector<Vec3>& singular, double density);
 
 // measure_cage (quad.h) with the design's normals already built.
 QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
