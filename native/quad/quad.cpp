@@ -89,14 +89,11 @@ int oversized_quads(const CageChecks& checks, const QuadCage& cage, double densi
 
 int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
                                 const std::vector<Vec3>& singular, double density) {
-  std::vector<int> quads_at(cage.vertices.rows(), 0);
-  for (int q = 0; q < cage.quads.rows(); ++q)
-    for (int k = 0; k < 4; ++k) ++quads_at[cage.quads(q, k)];
-  for (const auto& chain : cage.boundary_chains)
-    for (int v : chain) quads_at[v] = 4;  // boundary vertices are not counted
+  const CageIncidence incidence(cage);
   int off = 0;
-  for (int v = 0; v < static_cast<int>(quads_at.size()); ++v) {
-    if (quads_at[v] == 4 || quads_at[v] == 0) continue;
+  for (int v = 0; v < static_cast<int>(cage.vertices.rows()); ++v) {
+    const size_t quads = incidence.quads_of[v].size();
+    if (incidence.on_chain[v] || quads == 4 || quads == 0) continue;
     const Vec3 p = cage.vertices.row(v).transpose();
     const int near = checks.normals.nearest_vertex(p);
     const double size = near >= 0 ? checks.surface.vertex_size[near] / density : 0;

@@ -25,27 +25,6 @@ constexpr double kMinCornerDegrees = 5.0;
 // After a diagonal collapse the neighbourhood is smoothed until its corners reach this.
 constexpr double kShapeCornerDegrees = 30.0;
 
-// Per cage vertex: whether it lies on a boundary chain (never moved or merged away), the
-// quads around it and its edge neighbours.
-struct CageIncidence {
-  explicit CageIncidence(const QuadCage& cage)
-      : on_chain(cage.vertices.rows(), 0),
-        quads_of(cage.vertices.rows()),
-        neighbours(cage.vertices.rows()) {
-    for (const auto& chain : cage.boundary_chains)
-      for (int v : chain) on_chain[v] = 1;
-    for (int q = 0; q < cage.quads.rows(); ++q)
-      for (int k = 0; k < 4; ++k) {
-        const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
-        quads_of[a].push_back(q);
-        neighbours[a].insert(b), neighbours[b].insert(a);
-      }
-  }
-  std::vector<char> on_chain;
-  std::vector<std::vector<int>> quads_of;
-  std::vector<std::set<int>> neighbours;
-};
-
 // A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
 // or against the component face under its centroid.
 bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,

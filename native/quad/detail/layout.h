@@ -207,6 +207,28 @@ class DesignNormals {
   std::array<long, 3> key(const Vec3& p) const;
 };
 
+// Per cage vertex: whether it lies on a boundary chain (never moved or merged away by
+// untangle.cpp, not counted by irregular_off_singularities), the quads around it and its
+// edge neighbours.
+struct CageIncidence {
+  explicit CageIncidence(const QuadCage& cage)
+      : on_chain(cage.vertices.rows(), 0),
+        quads_of(cage.vertices.rows()),
+        neighbours(cage.vertices.rows()) {
+    for (const auto& chain : cage.boundary_chains)
+      for (int v : chain) on_chain[v] = 1;
+    for (int q = 0; q < cage.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) {
+        const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+        quads_of[a].push_back(q);
+        neighbours[a].insert(b), neighbours[b].insert(a);
+      }
+  }
+  std::vector<char> on_chain;
+  std::vector<std::vector<int>> quads_of;
+  std::vector<std::set<int>> neighbours;
+};
+
 // What measuring and repairing a cage test against, built once per component: closest
 // points on the component and the design's vertex normals.
 struct CageChecks {
