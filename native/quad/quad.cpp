@@ -474,12 +474,15 @@ bool comfortably_meets_targets(const QuadStats& s) {
 }  // namespace
 
 namespace quad_detail {
-// Irregular counts within 5% are even: lattice's requested layout had 130 at 9.3° against
+// Irregular vertices away from singularities count first (issue 5 wants none). Irregular
+// counts within 5% are even: lattice's requested layout had 130 at 9.3° against
 // the joined layout's 131 at 6.8°, and the first one's fit folded.
 bool better_cage(const QuadStats& a, const QuadStats& b) {
   const bool meets_a = meets_targets(a), meets_b = meets_targets(b);
   if (meets_a != meets_b) return meets_a;
   if ((a.collapsed_quads > 0) != (b.collapsed_quads > 0)) return a.collapsed_quads == 0;
+  if (meets_a && a.irregular_off_singularities != b.irregular_off_singularities)
+    return a.irregular_off_singularities < b.irregular_off_singularities;
   if (meets_a && std::abs(a.irregular_vertices - b.irregular_vertices) >
                      0.05 * std::max(a.irregular_vertices, b.irregular_vertices))
     return a.irregular_vertices < b.irregular_vertices;
@@ -497,7 +500,8 @@ namespace {
 // the targets with a margin, or until the work budget after the first cage that meets them
 // is spent (QuadOptions::work_after_meeting). Kept: among the cages meeting the targets, preferably one
 // that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit
-// surface can fold), then the fewest irregular vertices (counts within 5% of each other
+// surface can fold), then the fewest irregular vertices away from the field's
+// singularities, then the fewest irregular vertices (counts within 5% of each other
 // are even), then the smallest mean corner deviation (better_cage); if none meets them, the
 // valid cage with the smallest mean corner deviation.
 // The choice that was used is reported when it is not the requested one.
@@ -592,6 +596,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       extract_once(surface, checks, variants[k].options, &seen_layouts, &cage, &stats,
                    &diagnostics);
       tried_after_meeting += first_meeting >= 0;
+      stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
+          checks, cage, singular, variants[k].options.density);
     } catch (const Error& e) {
       tried_after_meeting += first_meeting >= 0 && seen_layouts.size() > layouts_seen;
       if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
@@ -623,12 +629,14 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       if (requested_stats && !meets_targets(*requested_stats)) {
         why = "the requested one missed the targets";
       } else if (requested_stats) {
-        char text[200];
+        char text[240];
         std::snprintf(text, sizeof text,
-                      "%d irregular vertices, %.1f° mean corner deviation, %d collapsed quads; "
-                      "the requested one: %d, %.1f°, %d",
-                      best_stats.irregular_vertices, best_stats.mean_angle_deviation_deg,
-                      best_stats.collapsed_quads, requested_stats->irregular_vertices,
+                      "%d irregular vertices (%d away from singularities), %.1f° mean corner "
+                      "deviation, %d collapsed quads; the requested one: %d (%d), %.1f°, %d",
+                      best_stats.irregular_vertices, best_stats.irregular_off_singularities,
+                      best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads,
+                      requested_stats->irregular_vertices,
+                      requested_stats->irregular_off_singularities,
                       requested_stats->mean_angle_deviation_deg, requested_stats->collapsed_quads);
         why = text;
       }
@@ -636,8 +644,6 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                                  ": the cage uses the layout with " + variants[best].what +
                                  " (" + why + ")");
     }
-    best_stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
-        checks, best_cage, singular, variants[best].options.density);
     out->cages.push_back(std::move(best_cage));
     out->stats.push_back(best_stats);
     return;

@@ -495,7 +495,8 @@ TEST(Quad, AWidePatchBetweenShortArcsKeepsARow) {
 // that starts 0.6 away (beyond the 0.3 join distance) runs on to the barrier, and so does
 // one 0.2 away when joining is off.
 // Among layout choices: meeting the targets wins, then no collapsed quad, then fewer
-// irregular vertices, but counts within 5% are even and the smaller corner deviation wins.
+// irregular vertices away from singularities, then fewer irregular vertices, but counts
+// within 5% are even and the smaller corner deviation wins.
 TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   auto stats = [](int interior, int regular, int irregular, double degrees, int collapsed) {
     QuadStats s;
@@ -521,6 +522,13 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   EXPECT_FALSE(quad_detail::better_cage(missing, collapsed));  // meeting wins over collapses
   const QuadStats clean = stats(500, 500, 0, 9.0, 0), six = stats(500, 494, 6, 4.0, 0);
   EXPECT_TRUE(quad_detail::better_cage(clean, six));  // 0 against 6 is not within 5%
+  // Irregular vertices away from the singularities count before all the others: a cage
+  // with none wins over squarer ones with fewer irregular vertices in all.
+  QuadStats at_singularities = stats(5000, 4860, 140, 9.3, 0), dislocated = few_skewed;
+  dislocated.irregular_off_singularities = 3;
+  EXPECT_TRUE(quad_detail::better_cage(at_singularities, dislocated));
+  EXPECT_FALSE(quad_detail::better_cage(dislocated, at_singularities));
+  EXPECT_TRUE(quad_detail::better_cage(at_singularities, missing));  // but meeting comes first
 }
 
 // A walk passing near a singular vertex heads for it only along one of its separatrix
