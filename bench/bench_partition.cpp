@@ -1,6 +1,7 @@
 // bench_partition TRIANGLES — generates a level-set design of about TRIANGLES triangles
 // (a row of arches on keep-in feet, scenes.h) and prints seconds and peak memory per
 // stage of the pipeline. Run by bench/run for 10k, 100k and 1M triangles.
+// bench_partition netN — the same for a net of N × N cells (genus N², scenes.h) at h 0.12.
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -8,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <string>
 
 #include "pipeline/pipeline.h"
 #include "scenes.h"
@@ -26,14 +28,19 @@ double resident_mib() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const double target = argc > 1 ? std::stod(argv[1]) : 50000;
-  // Triangle count scales with 1/h²: calibrate on a coarse grid, then scale.
-  const int arches = 2;
-  const double h0 = 0.1;
-  const double t0 = static_cast<double>(testing::arch_row_scene(h0, arches).design.triangles.rows());
-  const double h = h0 * std::sqrt(t0 / target);
+  const std::string what = argc > 1 ? argv[1] : "50000";
+  const bool net = what.rfind("net", 0) == 0;
+  double h = 0.12;
+  if (!net) {
+    // Triangle count scales with 1/h²: calibrate on a coarse grid, then scale.
+    const double target = std::stod(what);
+    const double h0 = 0.1;
+    const double t0 = static_cast<double>(testing::arch_row_scene(h0, 2).design.triangles.rows());
+    h = h0 * std::sqrt(t0 / target);
+  }
   const auto start = std::chrono::steady_clock::now();
-  testing::Scene scene = testing::arch_row_scene(h, arches);
+  testing::Scene scene = net ? testing::net_scene(h, std::stoi(what.substr(3)))
+                             : testing::arch_row_scene(h, 2);
   const std::chrono::duration<double> generation = std::chrono::steady_clock::now() - start;
   const double base_mib = resident_mib();
 
@@ -56,6 +63,14 @@ int main(int argc, char** argv) {
   std::printf("cages: %zu (%d quads; %d of them the fallback), composed: %s\n",
               result.quads.cages.size(), quads, fallback,
               result.composed.report.ok ? "ok" : "NOT ok");
+  for (size_t c = 0; c < result.quads.stats.size(); ++c) {
+    const QuadStats& q = result.quads.stats[c];
+    std::printf("  cage %zu: %d quads, interior valence 4 %.1f%%, boundary valence 3 %.1f%%, mean corner "
+                "deviation %.1f deg, %d irregular (%d away from singularities)%s\n",
+                c, q.quads, 100 * q.interior_valence4_fraction(), 100 * q.boundary_valence3_fraction(),
+                q.mean_angle_deviation_deg, q.irregular_vertices, q.irregular_off_singularities,
+                q.fallback ? ", FALLBACK" : "");
+  }
   std::printf("%-10s %10s %16s\n", "stage", "seconds", "peak RSS (MiB)");
   double total = 0;
   for (const auto& t : result.timings) {

@@ -325,8 +325,9 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why) {
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid.
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
-                  const QuadOptions& options, std::set<std::size_t>* seen_layouts,
-                  QuadCage* cage, QuadStats* stats, Diagnostics* diagnostics) {
+                  const QuadOptions& options, double solve_seconds,
+                  std::set<std::size_t>* seen_layouts, QuadCage* cage, QuadStats* stats,
+                  Diagnostics* diagnostics) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
@@ -349,7 +350,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   for (int round = 0;; ++round) {
     layout_diagnostics.clear();
     patches = quad_detail::build_patches(surface, layout, options, layout_diagnostics);
-    if (quad_detail::quantize(patches, options, &failure, &relaxed)) break;
+    if (quad_detail::quantize(patches, options, &failure, &relaxed, solve_seconds)) break;
     int now = 0, taken = 0;
     // Cusp readings at an unbalanced patch are taken back first (always: they are readings,
     // not changes to the layout); only where there are none are the patches merged.
@@ -586,15 +587,30 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
   const int choices_after_meeting =
       static_cast<int>(options.work_after_meeting / std::max(1, triangles));
+  const auto started = std::chrono::steady_clock::now();
+  auto seconds_left = [&]() {
+    return options.seconds_per_component -
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
   for (size_t k = 0; k < variants.size(); ++k) {
+    if (k > 0 && seconds_left() <= 0) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "component %d: stopped trying layout choices after %.0f s "
+                    "(seconds_per_component), %zu of %zu tried",
+                    c, options.seconds_per_component - seconds_left(), k, variants.size());
+      out->diagnostics.push_back(text);
+      break;
+    }
     if (first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) break;
     QuadCage cage;
     QuadStats stats;
     Diagnostics diagnostics;
     const std::size_t layouts_seen = seen_layouts.size();
     try {
-      extract_once(surface, checks, variants[k].options, &seen_layouts, &cage, &stats,
-                   &diagnostics);
+      extract_once(surface, checks, variants[k].options,
+                   k == 0 ? 10.0 : std::clamp(seconds_left(), 1.0, 10.0), &seen_layouts, &cage,
+                   &stats, &diagnostics);
       tried_after_meeting += first_meeting >= 0;
       stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
           checks, cage, singular, variants[k].options.density);

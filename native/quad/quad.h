@@ -99,6 +99,12 @@ struct QuadOptions {
   // before; the search stops at once when a cage meets the targets with a margin. 6e5: all
   // choices on components of ≤ 25k triangles, 3 on lattice's 190k.
   double work_after_meeting = 6e5;
+  // Wall-clock seconds per component for trying layout choices: once spent, no further
+  // choice starts (the requested one always runs) and the best cage so far is kept, or the
+  // fallback cage if none is valid; each integer program gets at most the time left
+  // (between 1 and 10 s). A high-genus net of genus 64 (bench/run net) otherwise tried
+  // every choice at 10-40 s each.
+  double seconds_per_component = 60;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
   double density = 1.0;
   // Separatrices follow mesh edges: the component's triangles are split (at most

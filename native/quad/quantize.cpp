@@ -4,8 +4,10 @@
 // Formulation: a small integer program, solved by GLPK's branch-and-cut. Every arc is an
 // integer variable n ≥ lower (1, or 0 for short interior arcs); every patch gives two
 // equalities Σ(side 0) = Σ(side 2), Σ(side 1) = Σ(side 3). The cost is separable and convex,
-// (n − t)² / max(t, 1) with t = length / target size, written exactly at the integers as a
-// piecewise-linear function (unit segment variables with increasing slopes).
+// (n − t)² / max(t, 1) with t = length / target size, written as a piecewise-linear
+// function of integer segment variables with increasing slopes: exact at the integers
+// within 4 of the rounded target, its chords over segments of doubling width farther out.
+// The counts are sums of their segments (no count column or row of their own).
 // Why not a min-cost flow: around singularities a T-mesh has side cycles of odd twist
 // (Lyon et al. 2021), where an arc enters both of its constraints with the same sign; the
 // constraint matrix is then that of a bidirected graph, not a network, and rounding or
@@ -13,8 +15,9 @@
 // did). The integer program has no such case. Its LP relaxation is half-integral and the
 // constraints are homogeneous, so an integer solution exists whenever a real one does
 // (twice a half-integral solution), and branch-and-cut finds the nearest.
-// Complexity: arcs · segments columns (segments ≈ 2t + 8); the layouts seen here (≤ a
-// few hundred arcs) solve in milliseconds. A time limit keeps the best solution found.
+// Complexity: arcs · segments columns (segments ≈ 8 + 2 log t); the fixtures' layouts (≤ a
+// few hundred arcs) solve in milliseconds, a genus-64 net's (6–20k arcs) takes 10 s or
+// more. A time limit (10 s, or the component's time left) keeps the best solution found.
 #include <glpk.h>
 
 #include <algorithm>
@@ -66,50 +69,58 @@ std::vector<SideRow> side_rows(const PatchLayout& layout) {
 
 // One exact solve with per-arc lower bounds (0 or 1).
 bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<int>& lower,
-           std::string* failure) {
+           double seconds, std::string* failure) {
   const int arcs = static_cast<int>(layout.arcs.size());
   const std::vector<SideRow> rows = side_rows(layout);
   glp_term_out(GLP_OFF);
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
   glp_set_obj_dir(lp, GLP_MIN);
-  // Columns: per arc its count n (integer), then the unit segments above and below the
-  // rounded target b: n − Σ up + Σ down = b, each segment priced at its cost increment.
-  std::vector<int> count_col(arcs);
-  std::vector<int> ia{0}, ja{0};
-  std::vector<double> ar{0};
-  const int link_rows = arcs;
-  glp_add_rows(lp, link_rows + static_cast<int>(rows.size()));
+  // Per arc, its count n = b + Σ up − Σ down around the rounded target b, in integer
+  // segments priced at the cost's increments: unit segments within kExact of b, then
+  // segments doubling in width (priced at the cost's chord, above the convex cost in
+  // between), so that a long arc needs few columns. The counts are substituted into the
+  // rows: no column or row per count.
+  constexpr int kExact = 4;
+  struct Segment { int column; double sign; };
+  std::vector<std::vector<Segment>> segments(arcs);
+  std::vector<int> base(arcs);
   for (int a = 0; a < arcs; ++a) {
     const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
-    const int base = std::max(lower[a], static_cast<int>(std::lround(t)));
-    const int upper = 2 * base + 8;
+    base[a] = std::max(lower[a], static_cast<int>(std::lround(t)));
+    const int upper = 2 * base[a] + 8;
     auto cost = [&](int n) { return (n - t) * (n - t) / std::max(t, 1.0); };
-    const int row = a + 1;
-    glp_set_row_bnds(lp, row, GLP_FX, base, base);
-    const int col = glp_add_cols(lp, 1);
-    count_col[a] = col;
-    glp_set_col_kind(lp, col, GLP_IV);
-    glp_set_col_bnds(lp, col, GLP_DB, lower[a], upper);
-    ia.push_back(row), ja.push_back(col), ar.push_back(1.0);
-    for (int n = base; n < upper; ++n) {  // n → n + 1
-      const int up = glp_add_cols(lp, 1);
-      glp_set_col_bnds(lp, up, GLP_DB, 0, 1);
-      glp_set_obj_coef(lp, up, cost(n + 1) - cost(n));
-      ia.push_back(row), ja.push_back(up), ar.push_back(-1.0);
-    }
-    for (int n = base; n > lower[a]; --n) {  // n → n − 1
-      const int down = glp_add_cols(lp, 1);
-      glp_set_col_bnds(lp, down, GLP_DB, 0, 1);
-      glp_set_obj_coef(lp, down, cost(n - 1) - cost(n));
-      ia.push_back(row), ja.push_back(down), ar.push_back(1.0);
-    }
+    auto add_segments = [&](int to, double sign) {
+      for (int n = base[a], width = 1; n != to;) {
+        const int step = std::min(width, std::abs(to - n));
+        const int next = n + (to > n ? step : -step);
+        const int column = glp_add_cols(lp, 1);
+        glp_set_col_kind(lp, column, GLP_IV);
+        glp_set_col_bnds(lp, column, GLP_DB, 0, step);
+        glp_set_obj_coef(lp, column, (cost(next) - cost(n)) / step);
+        segments[a].push_back({column, sign});
+        if (std::abs(next - base[a]) >= kExact) width *= 2;
+        n = next;
+      }
+    };
+    add_segments(upper, 1.0);
+    add_segments(lower[a], -1.0);
   }
-  for (size_t r = 0; r < rows.size(); ++r) {
-    const int row = link_rows + static_cast<int>(r) + 1;
-    glp_set_row_bnds(lp, row, GLP_FX, 0, 0);
-    for (auto& [a, c] : rows[r].coefficients)
-      ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0};
+  // Σ c·n over the given arcs as a row over segment columns; returns Σ c·b (to move right).
+  auto add_counts = [&](int row, const std::map<int, int>& coefficients) {
+    double constant = 0;
+    for (auto& [a, c] : coefficients) {
+      constant += c * base[a];
+      for (const Segment& g : segments[a]) ia.push_back(row), ja.push_back(g.column), ar.push_back(c * g.sign);
+    }
+    return constant;
+  };
+  for (const SideRow& side_row : rows) {
+    const int row = glp_add_rows(lp, 1);
+    const double constant = add_counts(row, side_row.coefficients);
+    glp_set_row_bnds(lp, row, GLP_FX, -constant, -constant);
   }
   // A patch at least one cage edge wide across a pair of sides should keep a row of quads
   // there even when those sides are short arcs (their targets say nothing about the
@@ -126,10 +137,10 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
       const double width = patch.quads * options.density * options.density / std::max(along, 1.0);
       if (width < 1 || across >= 1) continue;
       const int row = glp_add_rows(lp, 1);
-      glp_set_row_bnds(lp, row, GLP_LO, 1, 0);
       std::map<int, int> coefficient;
       for (auto& [a, reversed] : patch.sides[pair]) ++coefficient[a];
-      for (auto& [a, c] : coefficient) ia.push_back(row), ja.push_back(count_col[a]), ar.push_back(c);
+      const double constant = add_counts(row, coefficient);
+      glp_set_row_bnds(lp, row, GLP_LO, 1 - constant, 0);
       const int slack = glp_add_cols(lp, 1);
       glp_set_col_bnds(lp, slack, GLP_DB, 0, 1);
       glp_set_obj_coef(lp, slack, width);
@@ -140,7 +151,7 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   glp_init_iocp(&parameters);
   parameters.msg_lev = GLP_MSG_OFF;
   parameters.presolve = GLP_ON;
-  parameters.tm_lim = 10000;
+  parameters.tm_lim = static_cast<int>(1000 * std::max(seconds, 1.0));
   const int code = glp_intopt(lp, &parameters);
   const int status = glp_mip_status(lp);
   if ((code != 0 && code != GLP_ETMLIM) || (status != GLP_OPT && status != GLP_FEAS)) {
@@ -151,8 +162,11 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
                          std::to_string(code) + ")";
     return false;
   }
-  for (int a = 0; a < arcs; ++a)
-    layout.arcs[a].count = static_cast<int>(std::lround(glp_mip_col_val(lp, count_col[a])));
+  for (int a = 0; a < arcs; ++a) {
+    double n = base[a];
+    for (const Segment& g : segments[a]) n += g.sign * glp_mip_col_val(lp, g.column);
+    layout.arcs[a].count = static_cast<int>(std::lround(n));
+  }
   return true;
 }
 
@@ -210,7 +224,7 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
 // with those bounds; then every interior arc may get 0 (reported by the caller as
 // collapsed patches), which the cost keeps to the fewest and shortest arcs.
 bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* failure,
-              bool* relaxed) {
+              bool* relaxed, double seconds) {
   const int arcs = static_cast<int>(layout.arcs.size());
   const std::vector<int> sides_of = sides_per_arc(layout);
   *relaxed = false;
@@ -218,7 +232,7 @@ bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* fail
   for (int a = 0; a < arcs; ++a)
     if (sides_of[a] == 2 && layout.arcs[a].target * options.density < 1.0) lower[a] = 0;
   for (int round = 0; round <= 4 * arcs; ++round) {
-    if (!solve(layout, options, lower, failure)) {
+    if (!solve(layout, options, lower, seconds, failure)) {
       if (*relaxed) return false;
       *relaxed = true;
       for (int a = 0; a < arcs; ++a)

@@ -1120,3 +1120,57 @@ TEST(Quad, FallbackCageWhenNoLayoutWorks) {
   EXPECT_EQ(static_cast<long>(result.cages[0].boundary_chains.size()), loops);
   EXPECT_GT(s.interior_valence4_fraction(), 0.6);  // most vertices are edge midpoints
 }
+
+// The choices are tried only within the component's time (QuadOptions::
+// seconds_per_component): with none, only the requested one runs (here it fails, as every
+// layout does without extra cuts), the fallback cage follows, and that is reported. With
+// the default time all of them run first.
+TEST(Quad, LayoutChoicesStopWhenTheComponentsTimeIsSpent) {
+  const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  auto stopped = [](const QuadResult& result) {
+    return std::any_of(result.diagnostics.begin(), result.diagnostics.end(), [](const std::string& d) {
+      return d.find("stopped trying layout choices") != std::string::npos;
+    });
+  };
+  QuadOptions options;
+  options.max_fix_rounds = 0;
+  const QuadResult full = extract_cages(r.mesh, r.partition, field, options, Context());
+  ASSERT_EQ(full.cages.size(), 1u);
+  EXPECT_TRUE(full.stats[0].fallback);
+  EXPECT_FALSE(stopped(full));
+  options.seconds_per_component = 0;
+  const QuadResult limited = extract_cages(r.mesh, r.partition, field, options, Context());
+  ASSERT_EQ(limited.cages.size(), 1u);
+  EXPECT_TRUE(limited.stats[0].fallback);
+  ASSERT_TRUE(stopped(limited));
+  for (const auto& d : limited.diagnostics)
+    if (d.find("stopped trying") != std::string::npos) EXPECT_NE(d.find(", 1 of "), std::string::npos) << d;
+  EXPECT_EQ(check_cage(limited.cages[0], r), 0);
+}
+
+// Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
+// singularities) gets a field-aligned cage that meets the targets, every loop one chain,
+// and the cage has the component's genus (V − E + F = 2 − 2g − loops).
+TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
+  const Scene scene = net_scene(0.1, 3);
+  const Partitioned r = relaxed(partition_scene(scene));
+  int problems = 0;
+  const QuadResult result = extract_and_check("net 3x3", r, &problems);
+  EXPECT_EQ(problems, 0);
+  ASSERT_EQ(result.cages.size(), 1u);
+  const QuadStats& s = result.stats[0];
+  EXPECT_FALSE(s.fallback);
+  expect_targets("net 3x3", s);
+  const QuadCage& cage = result.cages[0];
+  EXPECT_EQ(static_cast<int>(cage.boundary_chains.size()), scene.expected_loops);
+  std::set<std::pair<int, int>> edges;
+  for (Eigen::Index q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) {
+      const int a = cage.quads(q, k), b = cage.quads(q, (k + 1) % 4);
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  const long euler = static_cast<long>(cage.vertices.rows()) - static_cast<long>(edges.size()) +
+                     static_cast<long>(cage.quads.rows());
+  EXPECT_EQ(euler, 2 - 2 * 9 - scene.expected_loops);
+}

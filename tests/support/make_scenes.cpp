@@ -1,10 +1,13 @@
-// make_scenes DIR [h] — writes the analytic level-set scenes of scenes.h as OBJ files,
+// make_scenes DIR [h] [net N] — writes the analytic level-set scenes of scenes.h (or only
+// the net of N × N cells) as OBJ files,
 // DIR/<scene>/design.obj and DIR/<scene>/<solid>_<role>.obj, plus DIR/<scene>/grid.txt
 // ("ox oy oz h") and expected.txt ("components loops"). Used by the Python tests.
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "level_set.h"
 #include "scenes.h"
@@ -18,8 +21,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   const double h = argc > 2 ? std::stod(argv[2]) : 0.06;
-  for (const Scene& s : {grown_box_scene(h), tube_scene(h), two_arches_scene(h), eroded_seed_scene(h),
-                         bolt_hole_scene(h)}) {
+  std::vector<Scene> scenes;
+  if (argc > 4 && std::string(argv[3]) == "net") {
+    scenes.push_back(net_scene(h, std::stoi(argv[4])));
+  } else {
+    for (Scene s : {grown_box_scene(h), tube_scene(h), two_arches_scene(h), eroded_seed_scene(h),
+                    bolt_hole_scene(h)})
+      scenes.push_back(std::move(s));
+  }
+  for (const Scene& s : scenes) {
     const auto dir = std::filesystem::path(argv[1]) / s.name;
     std::filesystem::create_directories(dir);
     write_obj((dir / "design.obj").string(), s.design);

@@ -77,6 +77,26 @@ Scene arch_row_scene(double h, int n) {
   return s;
 }
 
+Scene net_scene(double h, int n) {
+  const double radius = 0.2, reach = 0.9;  // x-struts run `reach` past the outer y-struts
+  const Vec3 lo0(-reach - 0.5, -0.5, -0.5), hi0(-reach + 0.3, n + 0.5, 0.5);
+  const Vec3 lo1(n + reach - 0.3, -0.5, -0.5), hi1(n + reach + 0.5, n + 0.5, 0.5);
+  auto f = [=](const Vec3& p) {
+    double d = std::min(box_sdf(p, lo0, hi0), box_sdf(p, lo1, hi1));
+    for (int i = 0; i <= n; ++i) {
+      d = std::min(d, capsule_sdf(p, Vec3(-reach, i, 0), Vec3(n + reach, i, 0), radius));
+      d = std::min(d, capsule_sdf(p, Vec3(i, 0, 0), Vec3(i, n, 0), radius));
+    }
+    return d;
+  };
+  Scene s = extract("net", f, lo0 - Vec3(0.3, 0.3, 0.3), hi1 + Vec3(0.3, 0.3, 0.3), h);
+  s.solids.push_back(solid("left", Role::KeepIn, box_mesh(lo0, hi0)));
+  s.solids.push_back(solid("right", Role::KeepIn, box_mesh(lo1, hi1)));
+  s.expected_components = 1;
+  s.expected_loops = 2 * (n + 1);
+  return s;
+}
+
 Scene two_arches_scene(double h) {
   std::vector<std::pair<Vec3, Vec3>> boxes;
   for (double y : {-1.5, 1.5})

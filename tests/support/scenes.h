@@ -31,6 +31,10 @@ Scene eroded_seed_scene(double h);
 Scene bolt_hole_scene(double h);
 // A row of n arches joining n + 1 keep-in boxes at their feet (size scales with n).
 Scene arch_row_scene(double h, int n);
+// A flat net of n × n square cells (capsule struts of radius 0.2 along x and y, 1 apart)
+// whose n + 1 x-struts run into a keep-in bar at each end: 1 component of genus n², with
+// 2(n + 1) loops (a generative lattice of high genus).
+Scene net_scene(double h, int n);
 // The analytic scenes by number, for parameterised tests: 0 grown_box, 1 tube,
 // 2 two_arches, 3 eroded_seed, 4 bolt_hole, 5 (or more) arch_row of 3.
 Scene analytic_scene(int which, double h);

@@ -162,8 +162,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 // Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
 // integer program (quantize.cpp); false with the reason in `failure` if none exists.
 // `relaxed`: the layout needed long interior arcs at 0 edges to balance (reported).
+// `seconds`: time limit of each integer program solve (at least 1 s).
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
-              bool* relaxed);
+              bool* relaxed, double seconds = 10);
 
 // The patches whose side equalities cannot all hold even with every interior arc free to be
 // 0 (loop arcs ≥ 1): those that need slack in the LP that minimises the total imbalance.
