@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -76,48 +77,88 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
   glp_prob* lp = problem.get();
   glp_set_obj_dir(lp, GLP_MIN);
-  // Per arc, its count n = b + Σ up − Σ down around the rounded target b, in integer
-  // segments priced at the cost's increments: unit segments within kExact of b, then
-  // segments doubling in width (priced at the cost's chord, above the convex cost in
-  // between), so that a long arc needs few columns. The counts are substituted into the
-  // rows: no column or row per count.
+  // Arcs that must be equal (a row n_a − n_b = 0: two opposite sides of one arc each, the
+  // usual case along a strip of patches) are one variable, the strip's count: union-find
+  // over such rows, repeated while merging turns more rows into such pairs.
+  std::vector<int> parent(arcs);
+  for (int a = 0; a < arcs; ++a) parent[a] = a;
+  std::function<int(int)> find = [&](int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); };
+  auto by_class = [&](const std::map<int, int>& coefficients) {
+    std::map<int, int> out;
+    for (auto& [a, c] : coefficients) out[find(a)] += c;
+    for (auto it = out.begin(); it != out.end();) it = it->second ? std::next(it) : out.erase(it);
+    return out;
+  };
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (const SideRow& row : rows) {
+      const std::map<int, int> c = by_class(row.coefficients);
+      if (c.size() == 2 && c.begin()->second == -std::next(c.begin())->second) {
+        parent[find(std::next(c.begin())->first)] = find(c.begin()->first);
+        merged = true;
+      }
+    }
+  }
+  // Per variable (a class of equal arcs), its count n = b + Σ up − Σ down around the
+  // integer b that minimises the members' summed cost, in integer segments priced at the
+  // cost's increments: unit segments within kExact of b, then segments doubling in width
+  // (priced at the cost's chord, above the convex cost in between), so that a long arc
+  // needs few columns. The counts are substituted into the rows: no column or row per count.
   constexpr int kExact = 4;
   struct Segment { int column; double sign; };
+  std::vector<std::vector<int>> members(arcs);
+  for (int a = 0; a < arcs; ++a) members[find(a)].push_back(a);
   std::vector<std::vector<Segment>> segments(arcs);
-  std::vector<int> base(arcs);
-  for (int a = 0; a < arcs; ++a) {
-    const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
-    base[a] = std::max(lower[a], static_cast<int>(std::lround(t)));
-    const int upper = 2 * base[a] + 8;
-    auto cost = [&](int n) { return (n - t) * (n - t) / std::max(t, 1.0); };
+  std::vector<int> base(arcs, 0);
+  for (int v = 0; v < arcs; ++v) {
+    if (members[v].empty()) continue;
+    int low = 0;
+    double weights = 0, weighted = 0, longest = 0;
+    for (int a : members[v]) {
+      const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
+      low = std::max(low, lower[a]);
+      weights += 1 / std::max(t, 1.0), weighted += t / std::max(t, 1.0);
+      longest = std::max(longest, t);
+    }
+    auto cost = [&](int n) {
+      double sum = 0;
+      for (int a : members[v]) {
+        const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
+        sum += (n - t) * (n - t) / std::max(t, 1.0);
+      }
+      return sum;
+    };
+    base[v] = std::max(low, static_cast<int>(std::lround(weighted / weights)));
+    const int upper = std::max(2 * base[v], static_cast<int>(std::ceil(longest))) + 8;
     auto add_segments = [&](int to, double sign) {
-      for (int n = base[a], width = 1; n != to;) {
+      for (int n = base[v], width = 1; n != to;) {
         const int step = std::min(width, std::abs(to - n));
         const int next = n + (to > n ? step : -step);
         const int column = glp_add_cols(lp, 1);
         glp_set_col_kind(lp, column, GLP_IV);
         glp_set_col_bnds(lp, column, GLP_DB, 0, step);
         glp_set_obj_coef(lp, column, (cost(next) - cost(n)) / step);
-        segments[a].push_back({column, sign});
-        if (std::abs(next - base[a]) >= kExact) width *= 2;
+        segments[v].push_back({column, sign});
+        if (std::abs(next - base[v]) >= kExact) width *= 2;
         n = next;
       }
     };
     add_segments(upper, 1.0);
-    add_segments(lower[a], -1.0);
+    add_segments(low, -1.0);
   }
   std::vector<int> ia{0}, ja{0};
   std::vector<double> ar{0};
   // Σ c·n over the given arcs as a row over segment columns; returns Σ c·b (to move right).
   auto add_counts = [&](int row, const std::map<int, int>& coefficients) {
     double constant = 0;
-    for (auto& [a, c] : coefficients) {
-      constant += c * base[a];
-      for (const Segment& g : segments[a]) ia.push_back(row), ja.push_back(g.column), ar.push_back(c * g.sign);
+    for (auto& [v, c] : by_class(coefficients)) {
+      constant += c * base[v];
+      for (const Segment& g : segments[v]) ia.push_back(row), ja.push_back(g.column), ar.push_back(c * g.sign);
     }
     return constant;
   };
   for (const SideRow& side_row : rows) {
+    if (by_class(side_row.coefficients).empty()) continue;  // holds by the merging
     const int row = glp_add_rows(lp, 1);
     const double constant = add_counts(row, side_row.coefficients);
     glp_set_row_bnds(lp, row, GLP_FX, -constant, -constant);
@@ -163,8 +204,9 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
     return false;
   }
   for (int a = 0; a < arcs; ++a) {
-    double n = base[a];
-    for (const Segment& g : segments[a]) n += g.sign * glp_mip_col_val(lp, g.column);
+    const int v = find(a);
+    double n = base[v];
+    for (const Segment& g : segments[v]) n += g.sign * glp_mip_col_val(lp, g.column);
     layout.arcs[a].count = static_cast<int>(std::lround(n));
   }
   return true;
