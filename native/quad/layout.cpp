@@ -459,6 +459,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           fixes.push_back(fix);
         } else {
           fixes.push_back(middle_cuts(cycles));
+          // If no cut traces (an annulus too thin to cross, e.g. around a strut): its
+          // shortest open arc goes, merging it with a neighbour.
+          fixes.back().remove_stretch = shortest_open_arc_of(cycles);
         }
         continue;
       }
