@@ -36,6 +36,8 @@ ComponentLocator::ComponentLocator(const Surface& s) : surface_(s), impl_(new Im
   GENBREP_CHECK(!impl_->triangles.empty(), Code::StageFailure,
                 "quad: component " + std::to_string(s.component) + " has no triangle with area");
   impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
+  // Built now, not on the first query: layout choices query one locator from several threads.
+  impl_->tree.build();
   impl_->tree.accelerate_distance_queries();
 }
 

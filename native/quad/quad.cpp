@@ -7,10 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <functional>
 #include <map>
 #include <optional>
 #include <set>
+#include <thread>
 #include <tuple>
 
 #include "quad/detail/layout.h"
@@ -322,12 +324,24 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why) {
   return true;
 }
 
+std::string same_layout(int c) {
+  return "quad: component " + std::to_string(c) + ": the same layout as an earlier choice";
+}
+
+// The layout's two fingerprints, set as extract_once reaches them: the traced curves (with
+// the options the rest reads) and the quantized patch layout.
+struct LayoutKeys {
+  std::optional<std::size_t> traced, quantized;
+};
+
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
-// when the layout cannot be quantized or the filled cage is invalid.
+// when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
+// is in `seen` (a layout an earlier choice already had). Reads only its arguments, so
+// attempts run on several threads at once.
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
                   const QuadOptions& options, double solve_seconds,
-                  std::set<std::size_t>* seen_layouts, QuadCage* cage, QuadStats* stats,
-                  Diagnostics* diagnostics) {
+                  const std::set<std::size_t>& seen, LayoutKeys* keys, QuadCage* cage,
+                  QuadStats* stats, Diagnostics* diagnostics) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
@@ -338,8 +352,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
                        static_cast<std::size_t>(options.max_balance_rounds);
   for (const auto& curve : layout.curves)
     for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
-  GENBREP_CHECK(seen_layouts->insert(traced).second, Code::StageFailure,
-                "quad: component " + std::to_string(c) + ": the same layout as an earlier choice");
+  keys->traced = traced;
+  GENBREP_CHECK(!seen.count(traced), Code::StageFailure, same_layout(c));
   // A layout whose sides cannot balance (a strip that would need a loop arc at 0 edges)
   // has its unbalanced patches merged with a neighbour, a few rounds at most.
   quad_detail::PatchLayout patches;
@@ -376,8 +390,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
     for (const auto& side : patch.sides)
       for (const auto& [a, reversed] : side)
         fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
-  GENBREP_CHECK(seen_layouts->insert(fingerprint).second, Code::StageFailure,
-                "quad: component " + std::to_string(c) + ": the same layout as an earlier choice");
+  keys->quantized = fingerprint;
+  GENBREP_CHECK(!seen.count(fingerprint), Code::StageFailure, same_layout(c));
   diagnostics->insert(diagnostics->end(), layout_diagnostics.begin(), layout_diagnostics.end());
   if (merged)
     diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
@@ -561,6 +575,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     out->diagnostics.push_back(text);
     for (auto& variant : variants) variant.options.density *= raise;
   }
+  const auto preparing = std::chrono::steady_clock::now();
   const int levels = refine_levels(coarse, variants[0].options);
   quad_detail::RefinedDesign refined;
   if (levels > 0) refined = quad_detail::refine_component(design, partition, field, c, levels);
@@ -569,6 +584,16 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   const quad_detail::Surface& surface = refined_surface ? *refined_surface : coarse;
   // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
   const quad_detail::CageChecks checks(coarse);
+  if (levels > 0) {
+    int refined_triangles = 0;
+    for (auto f : surface.mesh.faces()) refined_triangles += surface.in(f.idx());
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "component %d: refined %dx for tracing (%d triangles) in %.1f s", c,
+                  1 << (2 * levels), refined_triangles,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
+    out->diagnostics.push_back(text);
+  }
   std::vector<Vec3> singular;  // the component's field singularities (QuadStats)
   for (const auto& point : field.singularities)
     if (point.component == c) singular.push_back(coarse.point[point.vertex]);
@@ -592,7 +617,33 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     return options.seconds_per_component -
            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   };
-  for (size_t k = 0; k < variants.size(); ++k) {
+  // Choices run in batches of `threads` at once (each attempt reads only shared constant
+  // data); their results are taken in order, exactly as if they had run one after another:
+  // a layout an earlier choice of the same batch already had counts as repeated, and a
+  // batch's later results are dropped once the search would have stopped.
+  const int threads = std::max(
+      1, options.parallel_choices > 0
+             ? options.parallel_choices
+             : std::min(4, static_cast<int>(std::thread::hardware_concurrency())));
+  struct Attempt {
+    LayoutKeys keys;
+    QuadCage cage;
+    QuadStats stats;
+    Diagnostics diagnostics;
+    std::exception_ptr error;
+  };
+  auto attempt = [&](size_t k, double seconds, Attempt* a) {
+    try {
+      extract_once(surface, checks, variants[k].options, seconds, seen_layouts, &a->keys,
+                   &a->cage, &a->stats, &a->diagnostics);
+      a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
+          checks, a->cage, singular, variants[k].options.density);
+    } catch (...) {
+      a->error = std::current_exception();
+    }
+  };
+  bool stop = false;
+  for (size_t k = 0; k < variants.size() && !stop;) {
     if (k > 0 && seconds_left() <= 0) {
       char text[200];
       std::snprintf(text, sizeof text,
@@ -603,36 +654,64 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       break;
     }
     if (first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) break;
-    QuadCage cage;
-    QuadStats stats;
-    Diagnostics diagnostics;
-    const std::size_t layouts_seen = seen_layouts.size();
-    try {
-      extract_once(surface, checks, variants[k].options,
-                   k == 0 ? 10.0 : std::clamp(seconds_left(), 1.0, 10.0), &seen_layouts, &cage,
-                   &stats, &diagnostics);
+    const size_t batch = std::min(variants.size() - k, static_cast<size_t>(threads));
+    std::vector<Attempt> attempts(batch);
+    const double seconds = std::clamp(seconds_left(), 1.0, 10.0);
+    std::vector<std::thread> workers;
+    for (size_t i = 1; i < batch; ++i)
+      workers.emplace_back([&, i, first = k] {
+        attempt(first + i, seconds, &attempts[i]);
+        quad_detail::release_quantize_thread();
+      });
+    attempt(k, k == 0 ? 10.0 : seconds, &attempts[0]);
+    for (auto& worker : workers) worker.join();
+    for (size_t i = 0; i < batch && !stop; ++i, ++k) {
+      if (i > 0 && first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) {
+        stop = true;
+        break;
+      }
+      Attempt& a = attempts[i];
+      // Repeated layouts, as the sequential search sees them.
+      bool grew = false, repeated = false;
+      if (a.keys.traced) {
+        repeated = seen_layouts.count(*a.keys.traced) > 0;
+        if (!repeated) grew = seen_layouts.insert(*a.keys.traced).second;
+      }
+      if (!repeated && a.keys.quantized) {
+        repeated = !seen_layouts.insert(*a.keys.quantized).second;
+        grew |= !repeated;
+      }
+      std::string failure;
+      if (repeated) {
+        failure = same_layout(c);
+      } else if (a.error) {
+        try {
+          std::rethrow_exception(a.error);
+        } catch (const Error& e) {
+          if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
+          failure = e.what();
+        }
+      }
+      if (!failure.empty()) {
+        tried_after_meeting += first_meeting >= 0 && grew;
+        if (first_failure.empty()) first_failure = failure;
+        if (k == 0) requested_failure = failure;
+        continue;
+      }
       tried_after_meeting += first_meeting >= 0;
-      stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
-          checks, cage, singular, variants[k].options.density);
-    } catch (const Error& e) {
-      tried_after_meeting += first_meeting >= 0 && seen_layouts.size() > layouts_seen;
-      if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
-      if (first_failure.empty()) first_failure = e.what();
-      if (k == 0) requested_failure = e.what();
-      continue;
+      if (k == 0) requested_stats = a.stats;
+      // Collapsed quads mean the layout itself was broken there: such a cage ranks below
+      // every collapse-free one (better_cage), but a valid field-aligned cage still beats the
+      // fallback (the genus-64 net's: 97.6% valence 4 at 13.9°, against the fallback's 85%).
+      if (best < 0 || quad_detail::better_cage(a.stats, best_stats)) {
+        best = static_cast<int>(k);
+        best_cage = std::move(a.cage);
+        best_stats = a.stats;
+        best_diagnostics = std::move(a.diagnostics);
+      }
+      if (comfortably_meets_targets(best_stats) && !best_stats.collapsed_quads) stop = true;
+      if (first_meeting < 0 && meets_targets(a.stats)) first_meeting = static_cast<int>(k);
     }
-    if (k == 0) requested_stats = stats;
-    // Collapsed quads mean the layout itself was broken there: such a cage ranks below
-    // every collapse-free one (better_cage), but a valid field-aligned cage still beats the
-    // fallback (the genus-64 net's: 97.6% valence 4 at 13.9°, against the fallback's 85%).
-    if (best < 0 || quad_detail::better_cage(stats, best_stats)) {
-      best = static_cast<int>(k);
-      best_cage = std::move(cage);
-      best_stats = stats;
-      best_diagnostics = std::move(diagnostics);
-    }
-    if (comfortably_meets_targets(best_stats) && !best_stats.collapsed_quads) break;
-    if (first_meeting < 0 && meets_targets(stats)) first_meeting = static_cast<int>(k);
   }
   if (best >= 0) {
     out->diagnostics.insert(out->diagnostics.end(), best_diagnostics.begin(), best_diagnostics.end());

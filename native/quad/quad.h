@@ -105,6 +105,10 @@ struct QuadOptions {
   // (between 1 and 10 s). A high-genus net of genus 64 (bench/run net) otherwise tried
   // every choice at 10-40 s each.
   double seconds_per_component = 60;
+  // Layout choices tried at once, each on its own thread (0: the machine's hardware
+  // threads, at most 4). The kept cage does not depend on it: results are taken in
+  // choice order as if run one after another; the time budget is checked per batch.
+  int parallel_choices = 0;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
   double density = 1.0;
   // Separatrices follow mesh edges: the component's triangles are split (at most

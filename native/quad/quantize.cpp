@@ -302,4 +302,6 @@ bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* fail
   return false;
 }
 
+void release_quantize_thread() { glp_free_env(); }
+
 }  // namespace genbrep::quad_detail

@@ -19,7 +19,9 @@
 #include "quad/detail/layout.h"
 #include "quad/quad.h"
 #include "relax/relax.h"
+#include "fixtures.h"
 #include "partitioned.h"
+#include "pipeline/pipeline.h"
 #include "scenes.h"
 
 using namespace genbrep;
@@ -1122,9 +1124,9 @@ TEST(Quad, FallbackCageWhenNoLayoutWorks) {
 }
 
 // The choices are tried only within the component's time (QuadOptions::
-// seconds_per_component): with none, only the requested one runs (here it fails, as every
-// layout does without extra cuts), the fallback cage follows, and that is reported. With
-// the default time all of them run first.
+// seconds_per_component): with none, only the first batch of choices runs (the requested
+// one alone with parallel_choices = 1; here every layout fails without extra cuts), the
+// fallback cage follows, and that is reported. With the default time all of them run first.
 TEST(Quad, LayoutChoicesStopWhenTheComponentsTimeIsSpent) {
   const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1140,13 +1142,21 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsTimeIsSpent) {
   EXPECT_TRUE(full.stats[0].fallback);
   EXPECT_FALSE(stopped(full));
   options.seconds_per_component = 0;
-  const QuadResult limited = extract_cages(r.mesh, r.partition, field, options, Context());
-  ASSERT_EQ(limited.cages.size(), 1u);
-  EXPECT_TRUE(limited.stats[0].fallback);
-  ASSERT_TRUE(stopped(limited));
-  for (const auto& d : limited.diagnostics)
-    if (d.find("stopped trying") != std::string::npos) EXPECT_NE(d.find(", 1 of "), std::string::npos) << d;
-  EXPECT_EQ(check_cage(limited.cages[0], r), 0);
+  // Choices run in batches (QuadOptions::parallel_choices); the time is checked per batch.
+  for (int threads : {1, 2}) {
+    options.parallel_choices = threads;
+    const QuadResult limited = extract_cages(r.mesh, r.partition, field, options, Context());
+    ASSERT_EQ(limited.cages.size(), 1u);
+    EXPECT_TRUE(limited.stats[0].fallback);
+    ASSERT_TRUE(stopped(limited));
+    const std::string tried = ", " + std::to_string(threads) + " of ";
+    for (const auto& d : limited.diagnostics) {
+      if (d.find("stopped trying") != std::string::npos) {
+        EXPECT_NE(d.find(tried), std::string::npos) << d;
+      }
+    }
+    EXPECT_EQ(check_cage(limited.cages[0], r), 0);
+  }
 }
 
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
@@ -1173,4 +1183,42 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
   const long euler = static_cast<long>(cage.vertices.rows()) - static_cast<long>(edges.size()) +
                      static_cast<long>(cage.quads.rows());
   EXPECT_EQ(euler, 2 - 2 * 9 - scene.expected_loops);
+}
+
+// Layout choices run two at a time give the cage they give one at a time: on arches
+// (the second choice beats the first) and boss (the first fails, the second is kept),
+// the same cage, stats and diagnostics, and the kept choice is not the requested one.
+TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
+  for (const auto& [name, h] : {std::pair{"arches", 0.125}, {"boss", 0.1}}) {
+    const FixtureFiles f = load_fixture(name);
+    Options options;
+    options.incidence.mode = IncidenceOptions::Mode::Grid;
+    options.incidence.grid_h = h;
+    options.incidence.grid_origin = Vec3(0.37, 0.29, 0.41) * h;
+    options.until = "quad";
+    auto run = [&](int threads) {
+      options.quad.parallel_choices = threads;
+      return genbrep::convert({{"design", f.design}, f.solids}, options, Context()).quads;
+    };
+    const QuadResult one = run(1), two = run(2);
+    auto notes = [](const QuadResult& q) {  // without the timed ones
+      std::vector<std::string> kept;
+      for (const auto& d : q.diagnostics)
+        if (d.find("for tracing") == std::string::npos) kept.push_back(d);
+      return kept;
+    };
+    EXPECT_EQ(notes(one), notes(two)) << name;
+    EXPECT_TRUE(std::any_of(one.diagnostics.begin(), one.diagnostics.end(), [](const std::string& d) {
+      return d.find("uses the layout with") != std::string::npos;
+    })) << name;
+    ASSERT_EQ(one.cages.size(), two.cages.size()) << name;
+    ASSERT_FALSE(one.cages.empty()) << name;
+    for (size_t c = 0; c < one.cages.size(); ++c) {
+      EXPECT_EQ(one.cages[c].quads, two.cages[c].quads) << name << " cage " << c;
+      EXPECT_EQ(one.cages[c].vertices, two.cages[c].vertices) << name << " cage " << c;
+      EXPECT_EQ(one.cages[c].boundary_chains, two.cages[c].boundary_chains) << name << " cage " << c;
+      EXPECT_EQ(one.stats[c].irregular_vertices, two.stats[c].irregular_vertices) << name;
+      EXPECT_EQ(one.stats[c].mean_angle_deviation_deg, two.stats[c].mean_angle_deviation_deg) << name;
+    }
+  }
 }

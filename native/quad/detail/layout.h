@@ -165,6 +165,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 // `seconds`: time limit of each integer program solve (at least 1 s).
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
               bool* relaxed, double seconds = 10);
+// Frees the calling thread's integer-programming state (GLPK keeps one per thread); for
+// threads that ran quantize and end.
+void release_quantize_thread();
 
 // The patches whose side equalities cannot all hold even with every interior arc free to be
 // 0 (loop arcs ≥ 1): those that need slack in the LP that minimises the total imbalance.
