@@ -42,7 +42,18 @@ DesignNormals::DesignNormals(const TriMesh& design) {
   Vec3 hi = Vec3::Constant(-1e300);
   for (const Vec3& p : point_) lo_ = lo_.cwiseMin(p), hi = hi.cwiseMax(p);
   cell_ = nv ? std::max((hi - lo_).maxCoeff() / 64, 1e-12) : 1.0;
-  for (int v = 0; v < nv; ++v) buckets_[key(point_[v])].push_back(v);
+  for (int a = 0; a < 3; ++a) cells_[a] = nv ? long(std::floor((hi[a] - lo_[a]) / cell_)) + 1 : 0;
+  std::vector<long> cell_of(nv);
+  first_.assign(cells_[0] * cells_[1] * cells_[2] + 1, 0);
+  for (int v = 0; v < nv; ++v) {
+    const auto k = key(point_[v]);
+    cell_of[v] = (k[2] * cells_[1] + k[1]) * cells_[0] + k[0];
+    ++first_[cell_of[v] + 1];
+  }
+  for (size_t i = 1; i < first_.size(); ++i) first_[i] += first_[i - 1];
+  vertex_.resize(nv);
+  std::vector<int> next(first_.begin(), first_.end() - 1);
+  for (int v = 0; v < nv; ++v) vertex_[next[cell_of[v]]++] = v;
 }
 
 std::array<long, 3> DesignNormals::key(const Vec3& p) const {
@@ -63,9 +74,10 @@ int DesignNormals::nearest_vertex(const Vec3& p) const {
     for (long x = k[0] - radius; x <= k[0] + radius; ++x)
       for (long y = k[1] - radius; y <= k[1] + radius; ++y)
         for (long z = k[2] - radius; z <= k[2] + radius; ++z) {
-          auto it = buckets_.find({x, y, z});
-          if (it == buckets_.end()) continue;
-          for (int v : it->second) {
+          if (x < 0 || y < 0 || z < 0 || x >= cells_[0] || y >= cells_[1] || z >= cells_[2]) continue;
+          const long cell = (z * cells_[1] + y) * cells_[0] + x;
+          for (int i = first_[cell]; i < first_[cell + 1]; ++i) {
+            const int v = vertex_[i];
             const double d = (point_[v] - p).squaredNorm();
             if (d < best_d) best_d = d, best = v;
           }

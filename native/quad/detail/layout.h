@@ -195,7 +195,8 @@ class ComponentLocator {
 
 // The one test for a turned-over quad, shared by measure_cage and untangle_cage: the quad's
 // normal (cross product of its diagonals) against the area-weighted vertex normal of the
-// design vertex nearest its centroid (a hash grid over the design, locate in O(1) cells).
+// design vertex nearest its centroid (a uniform grid over the design's box, 64 cells along
+// its longest side, vertices bucketed per cell; locate in O(1) cells).
 class DesignNormals {
  public:
   explicit DesignNormals(const TriMesh& design);
@@ -207,7 +208,9 @@ class DesignNormals {
   std::vector<Vec3> point_, normal_;
   Vec3 lo_;
   double cell_ = 1;
-  std::map<std::array<long, 3>, std::vector<int>> buckets_;
+  std::array<long, 3> cells_{};   // per axis
+  std::vector<int> first_;        // per cell (x fastest) and one past the last: into vertex_
+  std::vector<int> vertex_;       // the vertices of each cell, ascending
   std::array<long, 3> key(const Vec3& p) const;
 };
 
