@@ -75,6 +75,8 @@ int main(int argc, char** argv) {
     for (const std::string& d : result.quads.diagnostics)
       if (d.find("layout") != std::string::npos || d.find("FALLBACK") != std::string::npos)
         std::printf("  quad: %s\n", d.c_str());
+  if (net)  // and how its solid was composed
+    for (const std::string& d : result.composed.report.diagnostics) std::printf("  compose: %s\n", d.c_str());
   std::printf("%-10s %10s %16s\n", "stage", "seconds", "peak RSS (MiB)");
   double total = 0;
   for (const auto& t : result.timings) {

@@ -608,7 +608,9 @@ TEST(Fit, ARegionAsCoarseAsTheCageIsSampledInsideItsTriangles) {
     EXPECT_LT(sampled.report.max_limit_to_design, 0.1 * f.h);
     EXPECT_LT(sampled.report.max_design_to_limit, 0.1 * f.h);
     EXPECT_LT(sampled.report.max_limit_to_design, 0.25 * sparse.report.max_limit_to_design);
-    if (fairness < 1e-4) EXPECT_TRUE(limit_folds(sparse.cage));
+    if (fairness < 1e-4) {
+      EXPECT_TRUE(limit_folds(sparse.cage));
+    }
   }
 }
 
