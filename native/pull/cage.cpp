@@ -115,7 +115,8 @@ OrganicSheet cage_sheet(const QuadCage& cage, const std::vector<std::vector<int>
 }
 
 CageRefinement refine_cage_boundary(const QuadCage& cage,
-                                    const std::vector<std::array<int, 2>>& edges) {
+                                    const std::vector<std::array<int, 2>>& edges,
+                                    Eigen::Index max_quads) {
   const auto directed = directed_edges(cage.quads);
   const auto key = [](int a, int b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
   // Walk each strip from its boundary edge; collect the undirected edges it cuts.
@@ -224,7 +225,8 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
       r.crease_values.insert(r.crease_values.end(), 2, value);
     }
   }
-  if (added.empty()) return out;
+  out.over_limit = max_quads >= 0 && r.quads.rows() > max_quads;
+  if (added.empty() || out.over_limit) return out;
   // Least-squares positions of the new points: the new limit closest to the old one on the
   // quads whose limit they influence (quads within one vertex ring of a cut quad).
   const int n_new = static_cast<int>(added.size());
@@ -247,6 +249,14 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
     Vec3 target;
   };
   std::vector<Sample> samples;
+  // Repeated entries are summed into `normal` every few million, not all kept at once.
+  Eigen::SparseMatrix<double> normal(n_new, n_new);
+  const auto flush = [&] {
+    Eigen::SparseMatrix<double> part(n_new, n_new);
+    part.setFromTriplets(entries.begin(), entries.end());  // sums repeated entries
+    normal += part;
+    entries.clear();
+  };
   for (size_t q = 0; q < quads.size(); ++q) {
     bool touched = false;
     for (int v : quads[q]) touched = touched || near[v];
@@ -275,14 +285,14 @@ CageRefinement refine_cage_boundary(const QuadCage& cage,
         samples.push_back(std::move(s));
       }
     }
+    if (entries.size() > (1u << 22)) flush();
   }
   const double lambda = 1e-6;
   for (int i = 0; i < n_new; ++i) {
     entries.emplace_back(i, i, lambda);
     rhs.row(i) += lambda * added[i].transpose();
   }
-  Eigen::SparseMatrix<double> normal(n_new, n_new);
-  normal.setFromTriplets(entries.begin(), entries.end());  // sums repeated entries
+  flush();
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
   Eigen::MatrixXd solved;
   if (solver.info() == Eigen::Success) solved = solver.solve(rhs);
@@ -451,7 +461,7 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
       for (int i : stuck_edges) edges.push_back({chain[i], chain[(i + 1) % chain.size()]});
     }
     if (edges.empty()) break;
-    CageRefinement refined = refine_cage_boundary(current, edges);
+    CageRefinement refined = refine_cage_boundary(current, edges, quad_limit);
     // Strips cross the whole component: where most of the boundary is stuck (η deeper than
     // the solid is thick, a gap) refinement would multiply the cage without helping.
     if (refined.cage.quads.rows() > quad_limit) {

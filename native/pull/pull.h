@@ -175,9 +175,14 @@ struct CageRefinement {
   double limit_change = 0;     // the same with the positions kept
   bool least_squares = false;  // kept the least-squares positions (they changed the limit's
                                // maximum less than the midpoints; else the midpoints)
+  bool over_limit = false;     // more quads than max_quads: midpoints only, no least squares
 };
+// `max_quads` (≥ 0): a refinement with more quads is only counted (its new points stay at
+// the midpoints): the caller will not use it, and the least squares over a cage of 100k+
+// quads cut by strips across a high-genus component needed 18 GB.
 CageRefinement refine_cage_boundary(const QuadCage& cage,
-                                    const std::vector<std::array<int, 2>>& edges);
+                                    const std::vector<std::array<int, 2>>& edges,
+                                    Eigen::Index max_quads = -1);
 
 struct CagePull {
   QuadCage cage;   // the pulled cage: boundary control points moved, the move faded inward

@@ -475,6 +475,19 @@ TEST(BoundaryInsertion, CrossingStripsCutAQuadInFourAndCreasesSplit) {
   std::printf(
       "[refine] grid 3x3, crossing strips: max limit change %.3g (%s kept), %.3g with midpoints\n",
       r.limit_change, r.least_squares ? "least squares" : "midpoints", r.midpoint_change);
+  // Over a quad limit the refinement is only counted: the same topology, its new points
+  // at the midpoints (here the least squares moved them).
+  ASSERT_TRUE(r.least_squares);
+  const CageRefinement over = refine_cage_boundary(cage, {{chain[1], chain[2]}, {chain[10], chain[11]}}, 15);
+  EXPECT_TRUE(over.over_limit);
+  EXPECT_FALSE(over.least_squares);
+  EXPECT_EQ(over.cage.quads, r.cage.quads);
+  EXPECT_EQ(over.inserted_per_chain, r.inserted_per_chain);
+  EXPECT_EQ(over.cage.vertices.topRows(16), cage.vertices);
+  EXPECT_NE(over.cage.vertices.bottomRows(9), r.cage.vertices.bottomRows(9));
+  const CageRefinement within = refine_cage_boundary(cage, {{chain[1], chain[2]}, {chain[10], chain[11]}}, 16);
+  EXPECT_FALSE(within.over_limit);
+  EXPECT_EQ(within.cage.vertices, r.cage.vertices);
   // A planar cage stays planar; an interior edge is refused.
   EXPECT_LT(r.cage.vertices.col(2).cwiseAbs().maxCoeff(), 1e-9);
   EXPECT_THROW(refine_cage_boundary(cage, {{5, 6}}), Error);
