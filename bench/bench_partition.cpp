@@ -71,12 +71,12 @@ int main(int argc, char** argv) {
                 q.mean_angle_deviation_deg, q.irregular_vertices, q.irregular_off_singularities,
                 q.fallback ? ", FALLBACK" : "");
   }
-  if (net)  // why a net's cage is what it is
+  if (net) {  // why a net's cage is what it is, and how its solid was composed
     for (const std::string& d : result.quads.diagnostics)
       if (d.find("layout") != std::string::npos || d.find("FALLBACK") != std::string::npos)
         std::printf("  quad: %s\n", d.c_str());
-  if (net)  // and how its solid was composed
     for (const std::string& d : result.composed.report.diagnostics) std::printf("  compose: %s\n", d.c_str());
+  }
   std::printf("%-10s %10s %16s\n", "stage", "seconds", "peak RSS (MiB)");
   double total = 0;
   for (const auto& t : result.timings) {

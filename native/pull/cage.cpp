@@ -464,7 +464,7 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
     CageRefinement refined = refine_cage_boundary(current, edges, quad_limit);
     // Strips cross the whole component: where most of the boundary is stuck (η deeper than
     // the solid is thick, a gap) refinement would multiply the cage without helping.
-    if (refined.cage.quads.rows() > quad_limit) {
+    if (refined.over_limit) {
       skipped = static_cast<int>(refined.cage.quads.rows());
       break;
     }

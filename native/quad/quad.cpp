@@ -596,13 +596,13 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   const quad_detail::Surface& surface = refined_surface ? *refined_surface : coarse;
   // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
   const quad_detail::CageChecks checks(coarse);
+  int triangles = 0;  // of the (refined) component
+  for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
   if (levels > 0) {
-    int refined_triangles = 0;
-    for (auto f : surface.mesh.faces()) refined_triangles += surface.in(f.idx());
     char text[200];
     std::snprintf(text, sizeof text,
                   "component %d: refined %dx for tracing (%d triangles) in %.1f s", c,
-                  1 << (2 * levels), refined_triangles,
+                  1 << (2 * levels), triangles,
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
     out->diagnostics.push_back(text);
   }
@@ -620,8 +620,6 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   // choices × the (refined) component's triangles (QuadOptions::work_after_meeting),
   // counting only choices that traced a new layout (a repeated one stops after tracing).
   int first_meeting = -1, tried_after_meeting = 0;
-  int triangles = 0;
-  for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
   const int choices_after_meeting =
       static_cast<int>(options.work_after_meeting / std::max(1, triangles));
   const auto started = std::chrono::steady_clock::now();

@@ -110,12 +110,13 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   for (int a = 0; a < arcs; ++a) members[find(a)].push_back(a);
   std::vector<std::vector<Segment>> segments(arcs);
   std::vector<int> base(arcs, 0);
+  auto target = [&](int a) { return std::max(layout.arcs[a].target * options.density, 1e-3); };
   for (int v = 0; v < arcs; ++v) {
     if (members[v].empty()) continue;
     int low = 0;
     double weights = 0, weighted = 0, longest = 0;
     for (int a : members[v]) {
-      const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
+      const double t = target(a);
       low = std::max(low, lower[a]);
       weights += 1 / std::max(t, 1.0), weighted += t / std::max(t, 1.0);
       longest = std::max(longest, t);
@@ -123,7 +124,7 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
     auto cost = [&](int n) {
       double sum = 0;
       for (int a : members[v]) {
-        const double t = std::max(layout.arcs[a].target * options.density, 1e-3);
+        const double t = target(a);
         sum += (n - t) * (n - t) / std::max(t, 1.0);
       }
       return sum;
