@@ -75,6 +75,15 @@ int main(int argc, char** argv) {
     for (const std::string& d : result.quads.diagnostics)
       if (d.find("layout") != std::string::npos || d.find("FALLBACK") != std::string::npos)
         std::printf("  quad: %s\n", d.c_str());
+    for (const Fitted& f : result.fitted) {
+      const FitReport& r = f.report;
+      std::printf("  fit %d: %d quads, %d rounds, %d refinements, max design->limit %.4f, "
+                  "limit->design %.4f, boundary %.4f (delta %.4f)%s\n",
+                  r.component, r.quads, r.rounds, r.refinements, r.max_design_to_limit,
+                  r.max_limit_to_design, r.max_boundary_distance, r.delta,
+                  r.kept_initial ? ", kept the initial cage" : "");
+      for (const std::string& d : r.diagnostics) std::printf("  fit: %s\n", d.c_str());
+    }
     for (const std::string& d : result.composed.report.diagnostics) std::printf("  compose: %s\n", d.c_str());
   }
   std::printf("%-10s %10s %16s\n", "stage", "seconds", "peak RSS (MiB)");

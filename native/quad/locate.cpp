@@ -44,8 +44,19 @@ ComponentLocator::ComponentLocator(const Surface& s) : surface_(s), impl_(new Im
 ComponentLocator::~ComponentLocator() = default;
 
 Vec3 ComponentLocator::closest(const Vec3& p, Vec3* normal) const {
-  const auto hit = impl_->tree.closest_point_and_primitive(Kernel::Point_3(p.x(), p.y(), p.z()));
-  if (normal) *normal = surface_.face_normal[impl_->face[hit.second - impl_->triangles.begin()]];
+  int hint = -1;
+  return closest(p, normal, &hint);
+}
+
+Vec3 ComponentLocator::closest(const Vec3& p, Vec3* normal, int* hint) const {
+  const Kernel::Point_3 query(p.x(), p.y(), p.z());
+  const auto hit =
+      *hint >= 0 && *hint < static_cast<int>(impl_->triangles.size())
+          ? impl_->tree.closest_point_and_primitive(
+                query, {impl_->triangles[*hint].vertex(0), impl_->triangles.begin() + *hint})
+          : impl_->tree.closest_point_and_primitive(query);
+  *hint = static_cast<int>(hit.second - impl_->triangles.begin());
+  if (normal) *normal = surface_.face_normal[impl_->face[*hint]];
   return Vec3(hit.first.x(), hit.first.y(), hit.first.z());
 }
 

@@ -186,6 +186,9 @@ class ComponentLocator {
   explicit ComponentLocator(const Surface& s);
   ~ComponentLocator();
   Vec3 closest(const Vec3& p, Vec3* normal) const;
+  // The same, starting the search from triangle *hint (a previous answer near p; -1: none)
+  // and leaving the triangle hit there: the same point, found faster.
+  Vec3 closest(const Vec3& p, Vec3* normal, int* hint) const;
 
  private:
   struct Impl;
@@ -297,6 +300,15 @@ int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage);
 // that would make one of its quads squeezed or turned over is undone. Returns the vertices
 // moved in the last sweep.
 int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step);
+// Squares a valid cage's quads: for `sweeps` sweeps every free vertex takes a gradient
+// step (in its tangent plane, back onto the component) on the squared deviations of the
+// corners it moves (its own and its neighbours' in its quads) from their ideal angles
+// (a full turn shared by the quads at an inner vertex; a chain vertex's angle sum as
+// filled, shared evenly); a step that does not lower them, or makes a quad squeezed or
+// turned over, or makes an edge longer than twice the target length (size field over
+// `density`) and than it was, is refused. Irregular and chain vertices stay. Returns the
+// vertices moved in the last sweep.
+int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density);
 // Removes doublets: an interior cage vertex with only two quads, which share two edges,
 // goes and the two quads become one. Returns how many (collapsed sliver patches leave
 // them; the limit surface folds at a doublet).
