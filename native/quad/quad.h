@@ -29,6 +29,10 @@
 //      quad that stays folded has a diagonal collapsed. The cage must then be a 2-manifold
 //      with no doublet. Several layout choices are tried (reported); the fallback cage
 //      (a split coarse remesh) is the last resort.
+//   5. squaring: the kept cage's inner vertices of four quads move on the surface to bring
+//      its corners closer to square while keeping its rows even and its edge lengths
+//      (untangle.cpp square_cage); chains and irregular vertices stay. Choices are
+//      compared before it, so a distorted layout cannot hide behind squared quads.
 //   3. filling: every patch is mapped to its integer rectangle (Tutte map with the sides
 //      sampled by arc length) and the grid's points are lifted back to the surface.
 // Gives: one QuadCage per organic component, in component order, with vertices on the
