@@ -456,7 +456,14 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
   };
   std::vector<int> folded;
   if (options.fold_check_samples > 0) folded = folded_quads(f.cage, options.fold_check_samples);
-  bool undo = !folded.empty() && !limit_intersects_itself(initial, options.fold_check_samples);
+  const bool initial_folds =
+      !folded.empty() && limit_intersects_itself(initial, options.fold_check_samples);
+  bool undo = !folded.empty() && !initial_folds;
+  // Both fold: nothing to go back to; the fit (nearer the region) is kept, and said so.
+  if (initial_folds)
+    report.diagnostics.push_back(
+        "the fitted limit surface intersects itself (" + std::to_string(folded.size()) +
+        " quads), and so does the initial cage's: the fit is kept, folded");
   if (undo && options.fold_smoothing_rounds > 0) {
     Fitting unfolded(f.cage);
     unfolded.measured = f.measured;

@@ -37,7 +37,9 @@
 // distances are measured, not estimated; numerical failure keeps the last good positions
 // and is reported in diagnostics; a fit whose limit surface intersects itself where the
 // initial cage's does not is repeated with the control points around the fold held
-// smoother, and undone if it still folds (the initial cage is returned, report.kept_initial).
+// smoother, and undone if it still folds (the initial cage is returned, report.kept_initial);
+// where the initial cage's limit surface intersects itself too, the fit is kept and the
+// diagnostics say that both fold.
 // Deterministic (no threads, no unordered iteration).
 // Complexity per round: O(Q·s²) limit evaluations (Q quads, s samples per edge), O(N log)
 // closest-point queries for N region vertices, one sparse LDLᵀ of the control points.

@@ -587,6 +587,24 @@ TEST(Fit, AFoldSmoothedIntoASurfaceThatStraysIsUndoneToo) {
   EXPECT_TRUE(strays);
 }
 
+// A cage whose own limit surface already intersects itself (the folded tube's plain fit)
+// has nothing to be undone to: fitted again, the fit is kept, and the report says that
+// both fold rather than saying nothing.
+TEST(Fit, AFoldTheInitialCageAlreadyHasIsReported) {
+  const Fixture f = folding_tube();
+  FitOptions plain_options;
+  plain_options.fold_check_samples = 0;
+  const Fitted plain = fit_cage(f.cage, f.region, f.curves, plain_options, Context());
+  ASSERT_TRUE(limit_folds(plain.cage));
+  const Fitted again = fit_cage(plain.cage, f.region, f.curves, FitOptions(), Context());
+  EXPECT_FALSE(again.report.kept_initial);
+  EXPECT_TRUE(limit_folds(again.cage));
+  bool reported = false;
+  for (const auto& d : again.report.diagnostics)
+    reported |= d.find("and so does the initial cage's") != std::string::npos;
+  EXPECT_TRUE(reported);
+}
+
 // A region about as coarse as the cage (368 vertices, 386 control points: a density raised
 // to the design's resolution, as on lattice) leaves quads without data. Fitted to the
 // vertices alone the limit surface strays between them, and with little fairness it folds;
