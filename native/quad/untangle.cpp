@@ -12,7 +12,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <set>
 
 #include "quad/detail/layout.h"
@@ -339,10 +338,10 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     }
     return e + kFairWeight * rows;
   };
-  // A vertex is looked at again only once it or a neighbour has moved.
-  // Within two rings of a vertex of six or more quads (left by a collapse) nothing moves:
-  // the limit surface folds there first (better_cage), and the fit of the 5 × 5 net's
-  // cage folded beside one once its quads were squared.
+  // Within two rings of a vertex of six or more quads (left by a collapse) nothing moves
+  // (nor do the rows through such vertices count): the limit surface folds there first
+  // (better_cage), and the fit of the 5 × 5 net's cage folded beside one once its quads
+  // were squared.
   std::vector<char> crowded(nv, 0);
   for (int v = 0; v < nv; ++v) crowded[v] = quads_of[v].size() >= 6;
   for (int grow = 0; grow < 2; ++grow) {
@@ -354,6 +353,7 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     crowded.swap(next);
   }
   for (int v = 0; v < nv; ++v) in_rows[v] &= !crowded[v];
+  // A vertex is looked at again only once it or a neighbour has moved.
   std::vector<char> active(in_rows), moved_now(nv, 0);
   std::vector<int> hint(nv, -1);  // each vertex's last triangle (ComponentLocator::closest)
   std::vector<double> last_step(nv, 0.1);  // over the vertex's mean edge length
