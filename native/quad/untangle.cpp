@@ -33,6 +33,12 @@ constexpr double kStretchWeight = 1.0;
 // the 5x5 net, 11.1° -> 6.8° but rows 30% less even; with it 7.9°, rows as even as filled).
 constexpr double kFairWeight = 1.0;
 
+// The angle at `at` between the edges to a and b, in radians.
+double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b) {
+  const Vec3 u = a - at, w = b - at;
+  return std::atan2(u.cross(w).norm(), u.dot(w));
+}
+
 // A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
 // or against the component face under its centroid.
 bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
@@ -40,9 +46,9 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
   Vec3 c[4];
   for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
   for (int k = 0; k < 4; ++k) {
-    const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
-    if (a.norm() == 0 || b.norm() == 0) return true;
-    if (std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi < min_corner_degrees) return true;
+    if (c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k]) return true;
+    if (corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < min_corner_degrees)
+      return true;
   }
   if (normals.flipped(c)) return true;
   Vec3 normal;
@@ -252,10 +258,6 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     while (cage.quads(q, k) != v) ++k;
     return std::array<int, 3>{cage.quads(q, (k + 1) % 4), cage.quads(q, (k + 2) % 4),
                               cage.quads(q, (k + 3) % 4)};
-  };
-  auto corner_angle = [](const Vec3& at, const Vec3& a, const Vec3& b) {
-    const Vec3 u = a - at, w = b - at;
-    return std::atan2(u.cross(w).norm(), u.dot(w));
   };
   // The rows through each free vertex of four quads: its neighbours in turn (one quad's
   // previous corner is the next quad's next), so ring[0], ring[2] and ring[1], ring[3]
