@@ -72,9 +72,10 @@ int main(int argc, char** argv) {
                 q.fallback ? ", FALLBACK" : "");
   }
   if (net) {  // why a net's cage is what it is, and how its solid was composed
-    for (const std::string& d : result.quads.diagnostics)
-      if (d.find("layout") != std::string::npos || d.find("FALLBACK") != std::string::npos)
+    for (const std::string& d : result.quads.notes)
+      if (d.find("layout") != std::string::npos || d.find("squared") != std::string::npos)
         std::printf("  quad: %s\n", d.c_str());
+    for (const std::string& d : result.quads.diagnostics) std::printf("  quad: warning: %s\n", d.c_str());
     for (const Fitted& f : result.fitted) {
       const FitReport& r = f.report;
       std::printf("  fit %d: %d quads, %d rounds, %d refinements, max design->limit %.4f, "

@@ -1,7 +1,8 @@
 """Text for progress, results and reports. No bpy here.
 
 The native report is a dict (DESIGN.md "Reports"): seconds per stage under 'stages',
-'counts', 'tolerance', 'diagnostics' (list of strings), maybe more. Formatting tolerates
+'counts', 'tolerance', 'diagnostics' (warnings: where the result falls short of what was
+asked), 'notes' (how the stages did their work), maybe more. Formatting tolerates
 missing keys and stages it does not know, so it keeps working as the pipeline grows.
 """
 
@@ -84,16 +85,18 @@ def report_lines(report, notes=()):
         lines.extend(f"  {key}: {format_value(value)}" for key, value in counts.items())
     if report.get("tolerance") is not None:
         lines.append(f"tolerance: {format_value(report['tolerance'])}")
-    shown = {"stages", "counts", "tolerance", "diagnostics", "seconds_total"}
+    shown = {"stages", "counts", "tolerance", "diagnostics", "notes", "seconds_total"}
     for key, value in report.items():
         if key not in shown and isinstance(value, (int, float, str, bool)):
             lines.append(f"{key}: {format_value(value)}")
     lines.extend(f"note: {note}" for note in notes)
+    lines.extend(f"note: {note}" for note in report.get("notes") or ())
     lines.extend(f"warning: {d}" for d in report.get("diagnostics") or ())
     return lines
 
 
 def warning_count(report):
+    """The report's warnings; its notes do not count."""
     return len((report or {}).get("diagnostics") or ())
 
 

@@ -99,7 +99,7 @@ CrossField compute_field(const TriMesh& design, const Partition& partition,
           << " singularities, target edge " << field.target_edge_length << ", min edge "
           << field.min_edge_length << ", tolerance " << field.tolerance << " (kappa_max "
           << field.kappa_max << ")";
-  field.diagnostics.push_back(summary.str());
+  field.notes.push_back(summary.str());
   context.step("field", 1.0);
   return field;
 }

@@ -101,7 +101,8 @@ struct CrossField {
   double min_edge_length = 0;     // clamp applied to size_u/size_v from below
   double tolerance = 0;           // ε of eq. 6
   double kappa_max = 0;           // the robust max |κ| ε was derived from
-  Diagnostics diagnostics;
+  Diagnostics diagnostics;        // warnings (degenerate triangles, non-integer indices)
+  Diagnostics notes;              // the summary: components, singularities, lengths
 
   // Sum of singularity indices of one component, in quarter turns (= 4·χ).
   int index_sum(int component) const;

@@ -264,6 +264,11 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     for (const auto& d : f.report.diagnostics) diagnostics.push_back("fit: " + d);
   }
   report["diagnostics"] = diagnostics;
+  // How the stages did their work, apart from the warnings above: nothing to act on.
+  json notes = json::array();
+  for (const auto& d : result.field.notes) notes.push_back(d);
+  for (const auto& d : result.quads.notes) notes.push_back("quad: " + d);
+  report["notes"] = notes;
   return report.dump(2);
 }
 

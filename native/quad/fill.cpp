@@ -35,7 +35,7 @@ Vec3 sample_arc(const Surface& s, const Arc& arc, double at) {
 }  // namespace
 
 QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& pl,
-                      Diagnostics& diagnostics) {
+                      Messages& messages) {
   QuadCage cage;
   cage.component = s.component;
   std::vector<Vec3> points;
@@ -201,11 +201,11 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
         quads.push_back({grid[i][j], grid[i + 1][j], grid[i + 1][j + 1], grid[i][j + 1]});
   }
   if (unlocated)
-    diagnostics.push_back("component " + std::to_string(s.component) + ": " +
+    messages.warnings.push_back("component " + std::to_string(s.component) + ": " +
                           std::to_string(unlocated) +
                           " grid points fell outside their patch's map (lifted to the nearest)");
   if (collapsed)
-    diagnostics.push_back("component " + std::to_string(s.component) + ": " +
+    messages.notes.push_back("component " + std::to_string(s.component) + ": " +
                           std::to_string(collapsed) +
                           " sliver patches collapsed (opposite sides quantized to 0)");
   // Compact the glued points.

@@ -264,7 +264,7 @@ int straighten_cusps(Layout& layout, const PatchLayout& patches, int patch) {
 }
 
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
-                          Diagnostics& diagnostics) {
+                          Messages& messages) {
   const std::string who = "component " + std::to_string(s.component);
   std::map<int, int> quarter_override;  // by the sector's outgoing halfedge
   std::set<int> wedge_tried;             // wedge patches cut once, by their first face
@@ -639,16 +639,16 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                   "quad: " + who + ": no extra cut could be traced into an invalid patch");
   }
   if (out.removed_stretches)
-    diagnostics.push_back(who + ": " + std::to_string(out.removed_stretches) +
+    messages.notes.push_back(who + ": " + std::to_string(out.removed_stretches) +
                           " stretches of separatrices removed (dangling, or enclosing a patch "
                           "too small to cut)");
   for (const Patch& patch : out.patches) out.cusps += !patch.cusps.empty();
   if (out.cusps)
-    diagnostics.push_back(who + ": " + std::to_string(out.cusps) +
+    messages.notes.push_back(who + ": " + std::to_string(out.cusps) +
                           " cusp patches (curves converging at under 45°) collapsed onto one "
                           "curve");
   if (out.recornered)
-    diagnostics.push_back(who + ": " + std::to_string(out.recornered) +
+    messages.notes.push_back(who + ": " + std::to_string(out.recornered) +
                           " patch corners re-read to make four-sided patches");
   return out;
 }

@@ -223,7 +223,7 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why);
 // it stays valid and its corners come closer to 90°.
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
-                            Diagnostics* diagnostics) {
+                            quad_detail::Messages* messages) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks.normals);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
@@ -231,7 +231,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
     const int moved = quad_detail::untangle_cage(checks, *cage, 24, &collapsed);
     stats = quad_detail::measure_cage(*cage, checks.normals);
     stats.collapsed_quads = collapsed;
-    diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
+    messages->warnings.push_back("component " + std::to_string(surface.component) + ": " +
                            std::to_string(bad) + " degenerate or flipped quads after filling; " +
                            std::to_string(moved) + " cage vertices around them smoothed" +
                            (collapsed ? ", " + std::to_string(collapsed) +
@@ -251,7 +251,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
     if (!cancelled_stats.flipped_quads && !cancelled_stats.degenerate_quads &&
         cancelled_stats.irregular_vertices < stats.irregular_vertices &&
         cage_is_manifold(cancelled, &why)) {
-      diagnostics->push_back("component " + std::to_string(surface.component) + ": " +
+      messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
                              std::to_string(pairs) +
                              " diagonal collapses or edge rotations cancelled irregular "
                              "vertices in pairs (" + std::to_string(stats.irregular_vertices) + " → " +
@@ -279,7 +279,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
 // filled and evened out, where a distorted layout (a fan of rows over collapsed slivers)
 // still shows in its angles; squaring would hide that.
 void square_kept(const quad_detail::CageChecks& checks, double density, int c, QuadCage* cage,
-                 QuadStats* stats, Diagnostics* diagnostics) {
+                 QuadStats* stats, Diagnostics* notes) {
   const auto start = std::chrono::steady_clock::now();
   QuadCage squared = *cage;
   const int moved = quad_detail::square_cage(checks, squared, 10, density);
@@ -295,7 +295,7 @@ void square_kept(const quad_detail::CageChecks& checks, double density, int c, Q
                 "%.1f s): mean deviation from 90° %.1f° → %.1f°",
                 c, moved, seconds, stats->mean_angle_deviation_deg,
                 measured.mean_angle_deviation_deg);
-  diagnostics->push_back(text);
+  notes->push_back(text);
   // Vertices moved, the topology did not: only the angles change.
   stats->mean_angle_deviation_deg = measured.mean_angle_deviation_deg;
   stats->max_angle_deviation_deg = measured.max_angle_deviation_deg;
@@ -385,11 +385,11 @@ struct LayoutKeys {
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
                   const QuadOptions& options, double solve_seconds,
                   const std::set<std::size_t>& seen, LayoutKeys* keys, QuadCage* cage,
-                  QuadStats* stats, Diagnostics* diagnostics) {
+                  QuadStats* stats, quad_detail::Messages* messages) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
-  quad_detail::Layout layout = quad_detail::start_layout(surface, *diagnostics);
-  quad_detail::trace_separatrices(surface, layout, options, *diagnostics);
+  quad_detail::Layout layout = quad_detail::start_layout(surface);
+  quad_detail::trace_separatrices(surface, layout, options, *messages);
   // The rest is deterministic in the traced curves and the options it reads: a choice
   // that traced the same curves as an earlier one with the same options gives its result.
   std::size_t traced = (options.fit_corners ? 2u : 1u) * 1000003u +
@@ -404,10 +404,10 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   std::string failure;
   bool relaxed = false;
   int merged = 0, straightened = 0;
-  Diagnostics layout_diagnostics;  // of the last round only
+  quad_detail::Messages layout_messages;  // of the last round only
   for (int round = 0;; ++round) {
-    layout_diagnostics.clear();
-    patches = quad_detail::build_patches(surface, layout, options, layout_diagnostics);
+    layout_messages = {};
+    patches = quad_detail::build_patches(surface, layout, options, layout_messages);
     if (quad_detail::quantize(patches, options, &failure, &relaxed, solve_seconds)) break;
     int now = 0, taken = 0;
     // Cusp readings at an unbalanced patch are taken back first (always: they are readings,
@@ -436,23 +436,23 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
         fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
   keys->quantized = fingerprint;
   GENBREP_CHECK(!seen.count(fingerprint), Code::StageFailure, same_layout(c));
-  diagnostics->insert(diagnostics->end(), layout_diagnostics.begin(), layout_diagnostics.end());
+  messages->append(layout_messages);
   if (merged)
-    diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
+    messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
                            " patches whose sides could not balance merged with a neighbour");
   if (straightened)
-    diagnostics->push_back("component " + std::to_string(c) + ": " +
+    messages->notes.push_back("component " + std::to_string(c) + ": " +
                            std::to_string(straightened) +
                            " cusp corners read as quarter turns after all, so that the "
                            "layout's sides balance");
   if (relaxed)
-    diagnostics->push_back("component " + std::to_string(c) +
+    messages->notes.push_back("component " + std::to_string(c) +
                            ": the layout's sides balance only with some interior arcs at 0 edges");
-  *cage = quad_detail::fill_patches(surface, layout, patches, *diagnostics);
+  *cage = quad_detail::fill_patches(surface, layout, patches, *messages);
   if (const int doublets = quad_detail::remove_doublets(*cage))
-    diagnostics->push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
+    messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
                            " doublets (interior vertices of two quads) removed");
-  *stats = measure_untangled(surface, checks, cage, diagnostics);
+  *stats = measure_untangled(surface, checks, cage, messages);
   stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, kOversized);
   if (stats->oversized_quads) {
     char text[200];
@@ -460,13 +460,13 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
                   "component %d: %d quads have an edge longer than %gx the target edge length "
                   "(quantization squeezed patches whose opposite sides differ)",
                   c, stats->oversized_quads, kOversized);
-    diagnostics->push_back(text);
+    messages->warnings.push_back(text);
   }
   stats->patches = static_cast<int>(patches.patches.size());
   stats->separatrices = layout.separatrices;
   stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (layout.dropped_traces)
-    diagnostics->push_back("component " + std::to_string(c) + ": " +
+    messages->notes.push_back("component " + std::to_string(c) + ": " +
                            std::to_string(layout.dropped_traces) + " traces dropped");
   std::string why;
   GENBREP_CHECK(cage_is_manifold(*cage, &why), Code::StageFailure,
@@ -615,7 +615,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                   "component %d: density raised %.2gx so that its singularities are at most "
                   "1 in %.0f cage vertices",
                   c, raise, options.vertices_per_singular_quarter);
-    out->diagnostics.push_back(text);
+    out->notes.push_back(text);
     for (auto& variant : variants) variant.options.density *= raise;
   }
   const auto preparing = std::chrono::steady_clock::now();
@@ -635,7 +635,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                   "component %d: refined %dx for tracing (%d triangles) in %.1f s", c,
                   1 << (2 * levels), triangles,
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
-    out->diagnostics.push_back(text);
+    out->notes.push_back(text);
   }
   std::vector<Vec3> singular;  // the component's field singularities (QuadStats)
   for (const auto& point : field.singularities)
@@ -646,7 +646,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   QuadCage best_cage;
   QuadStats best_stats;
   std::optional<QuadStats> requested_stats;  // the requested layout's cage, if it was valid
-  Diagnostics best_diagnostics;
+  quad_detail::Messages best_messages;
   // Once a cage meets the targets, more choices are tried only within a work budget:
   // choices × the (refined) component's triangles (QuadOptions::work_after_meeting),
   // counting only choices that traced a new layout (a repeated one stops after tracing).
@@ -670,13 +670,13 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     LayoutKeys keys;
     QuadCage cage;
     QuadStats stats;
-    Diagnostics diagnostics;
+    quad_detail::Messages messages;
     std::exception_ptr error;
   };
   auto attempt = [&](size_t k, double seconds, Attempt* a) {
     try {
       extract_once(surface, checks, variants[k].options, seconds, seen_layouts, &a->keys,
-                   &a->cage, &a->stats, &a->diagnostics);
+                   &a->cage, &a->stats, &a->messages);
       a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
           checks, a->cage, singular, variants[k].options.density);
     } catch (...) {
@@ -748,14 +748,16 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         best = static_cast<int>(k);
         best_cage = std::move(a.cage);
         best_stats = a.stats;
-        best_diagnostics = std::move(a.diagnostics);
+        best_messages = std::move(a.messages);
       }
       if (comfortably_meets_targets(best_stats) && !best_stats.collapsed_quads) stop = true;
       if (first_meeting < 0 && meets_targets(a.stats)) first_meeting = static_cast<int>(k);
     }
   }
   if (best >= 0) {
-    out->diagnostics.insert(out->diagnostics.end(), best_diagnostics.begin(), best_diagnostics.end());
+    out->diagnostics.insert(out->diagnostics.end(), best_messages.warnings.begin(),
+                            best_messages.warnings.end());
+    out->notes.insert(out->notes.end(), best_messages.notes.begin(), best_messages.notes.end());
     if (best > 0) {
       std::string why = "the requested one failed: " + requested_failure;
       if (requested_stats && !meets_targets(*requested_stats)) {
@@ -779,12 +781,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                       requested_stats->mean_angle_deviation_deg, requested_stats->collapsed_quads);
         why = text;
       }
-      out->diagnostics.push_back("component " + std::to_string(c) +
-                                 ": the cage uses the layout with " + variants[best].what +
-                                 " (" + why + ")");
+      out->notes.push_back("component " + std::to_string(c) +
+                           ": the cage uses the layout with " + variants[best].what + " (" + why +
+                           ")");
     }
-    square_kept(checks, variants[best].options.density, c, &best_cage, &best_stats,
-                &out->diagnostics);
+    square_kept(checks, variants[best].options.density, c, &best_cage, &best_stats, &out->notes);
     if (!meets_targets(best_stats)) {
       char text[240];
       std::snprintf(text, sizeof text,
@@ -810,10 +811,10 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   QuadStats stats;
   double scale = 0;
   bool valid = false;
-  Diagnostics untangled;  // of the rejected tries too: only the last one's is kept
+  quad_detail::Messages untangled;  // of the rejected tries too: only the last one's is kept
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
     cage = quad_detail::fallback_cage(coarse, factor * size);
-    untangled.clear();
+    untangled = {};
     stats = measure_untangled(surface, checks, &cage, &untangled);
     scale = factor;
     std::string why;
@@ -832,8 +833,10 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       first_failure + "); the cage is the FALLBACK: a coarse remesh (edge " + scale_text +
       " x the target) split into quads, not aligned with the field, "
       "with irregular vertices wherever triangles could not be paired");
-  out->diagnostics.insert(out->diagnostics.end(), untangled.begin(), untangled.end());
-  square_kept(checks, variants[0].options.density / scale, c, &cage, &stats, &out->diagnostics);
+  out->diagnostics.insert(out->diagnostics.end(), untangled.warnings.begin(),
+                         untangled.warnings.end());
+  out->notes.insert(out->notes.end(), untangled.notes.begin(), untangled.notes.end());
+  square_kept(checks, variants[0].options.density / scale, c, &cage, &stats, &out->notes);
   stats.irregular_off_singularities =
       quad_detail::irregular_off_singularities(checks, cage, singular, variants[0].options.density);
   out->cages.push_back(std::move(cage));

@@ -41,10 +41,12 @@
 // diagnostics.
 // Guarantees: only quads; the cage is manifold by construction (patches are disks, shared
 // arcs share their samples); every loop is one closed chain whose vertices lie on the
-// loop's polyline. What could not be built as intended (a patch that stayed non-disk,
-// quantization that did not converge, re-classified corners) is reported in diagnostics
-// and counted in the statistics, never silent; a component whose layout cannot be made
-// valid throws Error{StageFailure} naming it.
+// loop's polyline. Where the cage falls short of what was asked (quads squeezed beyond
+// 2.5x the target, quads untangled after filling, a search cut short, targets missed, the
+// fallback cage) it says so in `diagnostics` (warnings) and counts it in the statistics,
+// never silent; how the cage was made (refinement, re-read corners, collapsed slivers,
+// the layout choice kept, squaring) goes to `notes`. A component whose layout cannot be
+// made valid throws Error{StageFailure} naming it.
 // Deterministic. Complexity: O(F log F) for the layout and one sparse factorisation per
 // patch (Tutte map) for the filling; point location O(P·T_patch) per patch.
 #pragma once
@@ -172,7 +174,8 @@ struct QuadResult {
   std::vector<QuadCage> cages;
   std::vector<QuadStats> stats;  // same order as cages
   std::vector<QuadFailure> failures;
-  Diagnostics diagnostics;       // "component 2: 3 patches re-cornered", ...
+  Diagnostics diagnostics;       // warnings: "component 2: 3 quads have an edge longer ..."
+  Diagnostics notes;             // "component 2: 7 patch corners re-read ...", ...
 };
 
 QuadResult extract_cages(const TriMesh& design, const Partition& partition,

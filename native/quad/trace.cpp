@@ -136,7 +136,7 @@ void remove_arc(const Surface& s, Layout& layout, int c, int first, int last) {
   head.direction.resize(keep);
 }
 
-Layout start_layout(const Surface& s, const Diagnostics&) {
+Layout start_layout(const Surface& s) {
   Layout layout;
   const int nv = static_cast<int>(s.mesh.n_vertices());
   layout.edge_curve.assign(s.mesh.n_edges(), -1);
@@ -491,7 +491,7 @@ std::vector<Vec3> singular_directions(const Surface& s, int vertex, int valence,
 }
 
 void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& options,
-                        Diagnostics& diagnostics) {
+                        Messages& messages) {
   std::vector<Singularity> interior, concave;
   for (const Singularity& sing : s.field.singularities) {
     if (sing.component != s.component) continue;
@@ -544,7 +544,7 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
       }
   }
   if (absorbed)
-    diagnostics.push_back(who + ": " + std::to_string(absorbed) +
+    messages.notes.push_back(who + ": " + std::to_string(absorbed) +
                           " singularities next to a loop left to the boundary (not traced)");
   // All separatrix directions first; then traced in turns (the k-th of every singularity
   // per round) so no singularity claims the surface first. A direction already taken by
@@ -582,10 +582,10 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
   layout.allow_crossing = false;
   layout.merge_parallel = 0;
   if (layout.parallel_joins)
-    diagnostics.push_back(who + ": " + std::to_string(layout.parallel_joins) +
+    messages.notes.push_back(who + ": " + std::to_string(layout.parallel_joins) +
                           " separatrices joined an earlier curve they ran beside");
   if (missing)
-    diagnostics.push_back(who + ": " + std::to_string(missing) +
+    messages.notes.push_back(who + ": " + std::to_string(missing) +
                           " separatrices could not leave their singularity");
   for (const Singularity& sing : concave) {
     // The component's fan at a boundary vertex runs from its outgoing loop edge
@@ -600,11 +600,11 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
     if (first < 0 || last < 0) continue;
     for (int k = 0; k < -sing.index; ++k)
       if (!trace_from(s, layout, sing.vertex, first, last, (k + 1.0) / (1 - sing.index), true))
-        diagnostics.push_back(who + ": no separatrix could leave concave corner " +
+        messages.warnings.push_back(who + ": no separatrix could leave concave corner " +
                               std::to_string(sing.vertex));
   }
   if (layout.cancelled_pairs)
-    diagnostics.push_back("component " + std::to_string(s.component) + ": " +
+    messages.notes.push_back("component " + std::to_string(s.component) + ": " +
                           std::to_string(layout.cancelled_pairs) +
                           " cancelling singularity pairs not traced");
 }

@@ -101,6 +101,7 @@ TEST(Field, SphereIndicesSumToEulerCharacteristic) {
       r.mesh.n_faces(), field.singularities.size(), count_sign(field, +1), count_sign(field, -1),
       field.index_sum(0));
   for (const auto& d : field.diagnostics) std::printf("[field]   %s\n", d.c_str());
+  for (const auto& d : field.notes) std::printf("[field]   %s\n", d.c_str());
   EXPECT_EQ(field.index_sum(0), 8);
   for (int f = 0; f < static_cast<int>(r.mesh.n_faces()); ++f) {
     ASSERT_NEAR(field.direction.row(f).norm(), 1.0, 1e-9);
@@ -157,6 +158,7 @@ TEST(Field, DiskHasNoSingularityOnItsBoundary) {
       r.partition.loops[0].vertices.size(), field.singularities.size(), boundary, flat_boundary,
       field.index_sum(0));
   for (const auto& d : field.diagnostics) std::printf("[field]   %s\n", d.c_str());
+  for (const auto& d : field.notes) std::printf("[field]   %s\n", d.c_str());
   if (std::getenv("GENBREP_FIELD_DEBUG")) {
     for (const auto& s : field.singularities) {
       const auto& p = r.mesh.point(r.mesh.vertex_handle(s.vertex));

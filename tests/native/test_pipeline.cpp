@@ -1,6 +1,7 @@
 // Tests for pipeline/ and the command line: stage order, report, outputs, errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -76,6 +77,17 @@ TEST(Pipeline, TwoArchesGiveTwoComponentsAndFourLoops) {
   EXPECT_EQ(report["counts"]["organic_triangles"].get<int>() + report["counts"]["incident_triangles"].get<int>(),
             report["counts"]["triangles"].get<int>());
   for (const auto& stage : stage_names()) EXPECT_TRUE(report["stages"].contains(stage)) << stage;
+  // How the stages worked is in the notes; the warnings (diagnostics) hold only what falls
+  // short of what was asked, so a clean run has none from field or quad.
+  const auto mentions = [](const nlohmann::json& lines, const std::string& text) {
+    return std::count_if(lines.begin(), lines.end(), [&](const nlohmann::json& line) {
+      return line.get<std::string>().find(text) != std::string::npos;
+    });
+  };
+  EXPECT_EQ(mentions(report["notes"], "field: 2 components"), 1) << report["notes"];
+  EXPECT_EQ(mentions(report["notes"], "corners squared"), 2) << report["notes"];
+  EXPECT_EQ(mentions(report["diagnostics"], "field:"), 0) << report["diagnostics"];
+  EXPECT_EQ(mentions(report["diagnostics"], "quad:"), 0) << report["diagnostics"];
 }
 
 TEST(Pipeline, SameInputGivesSameOutput) {

@@ -167,7 +167,8 @@ QuadResult extract_and_check(const std::string& name, const Partitioned& r, int*
         s.flipped_quads, s.degenerate_quads, s.seconds);
     *problems += check_cage(result.cages[c], r);
   }
-  for (const auto& d : result.diagnostics) std::printf("[quad] %s: %s\n", name.c_str(), d.c_str());
+  for (const auto& d : result.diagnostics) std::printf("[quad] %s: warning: %s\n", name.c_str(), d.c_str());
+  for (const auto& d : result.notes) std::printf("[quad] %s: %s\n", name.c_str(), d.c_str());
   std::printf("[quad] %s: %zu triangles, %.3f s\n", name.c_str(), r.mesh.n_faces(), seconds);
   return result;
 }
@@ -260,7 +261,7 @@ quad_detail::Curve grid_curve(int n, int i0, int j0, int i1, int j1) {
 quad_detail::Layout bounded_square_layout(const quad_detail::Surface& s, int n,
                                           const quad_detail::Curve& inner) {
   const int last = n - 1;
-  quad_detail::Layout layout = quad_detail::start_layout(s, {});
+  quad_detail::Layout layout = quad_detail::start_layout(s);
   layout.curves = {grid_curve(n, 0, 0, 0, last), grid_curve(n, 0, last, last, last),
                    grid_curve(n, last, last, last, 0), grid_curve(n, last, 0, 0, 0), inner};
   for (int c = 0; c < 5; ++c) quad_detail::register_curve(s, layout, c);
@@ -545,7 +546,7 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
   auto vertex = [&](int i, int j) { return i * n + j; };
   const int singular = vertex(20, 20);  // (2, 2)
   auto fresh_layout = [&](bool taken) {
-    quad_detail::Layout layout = quad_detail::start_layout(s, {});
+    quad_detail::Layout layout = quad_detail::start_layout(s);
     quad_detail::Curve barrier;
     for (int i = 0; i < n; ++i) barrier.vertices.push_back(vertex(i, 30));  // x = 3
     barrier.direction.assign(n, Vec3(0, 1, 0));
@@ -600,7 +601,7 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
     return c;
   };
   auto fresh_layout = [&] {
-    quad_detail::Layout layout = quad_detail::start_layout(s, {});
+    quad_detail::Layout layout = quad_detail::start_layout(s);
     std::vector<int> along, barrier;
     for (int j = 5; j <= 30; ++j) along.push_back(vertex(20, j));
     for (int i = 0; i < n; ++i) barrier.push_back(vertex(i, 30));
@@ -836,9 +837,9 @@ TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   const int link_curve = 6;
   ASSERT_TRUE(layout.curves[link_curve].link);
 
-  Diagnostics diagnostics;
+  quad_detail::Messages messages;
   const quad_detail::PatchLayout patches =
-      quad_detail::build_patches(s, layout, QuadOptions{}, diagnostics);
+      quad_detail::build_patches(s, layout, QuadOptions{}, messages);
   EXPECT_EQ(patches.patches.size(), 3u);
   EXPECT_EQ(patches.recornered, 0);
   EXPECT_EQ(layout.curves.size(), 7u);  // no cut traced
@@ -874,14 +875,14 @@ TEST(Quad, AWedgePatchIsCutAcross) {
       }
     return worst;
   };
-  Diagnostics diagnostics;
+  quad_detail::Messages messages;
   QuadOptions off;
   off.wedge_cut_ratio = 0;
   quad_detail::Layout plain = layout_of();
-  const quad_detail::PatchLayout uncut = quad_detail::build_patches(s, plain, off, diagnostics);
+  const quad_detail::PatchLayout uncut = quad_detail::build_patches(s, plain, off, messages);
   EXPECT_GT(worst_ratio(uncut), 2.0);
   quad_detail::Layout cut = layout_of();
-  const quad_detail::PatchLayout patches = quad_detail::build_patches(s, cut, QuadOptions{}, diagnostics);
+  const quad_detail::PatchLayout patches = quad_detail::build_patches(s, cut, QuadOptions{}, messages);
   // The cut runs across the wedge from inside its long bottom side (to the diagonal); its
   // two halves are closer to rectangles than the wedge was (one cut per patch: the half
   // beside the 45° diagonal keeps sides 3 and 1).
@@ -909,7 +910,7 @@ TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
   const FlatGrid flat(n, 0.1);
   const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
   const int center = 10 * n + 10;
-  quad_detail::Layout layout = quad_detail::start_layout(s, {});
+  quad_detail::Layout layout = quad_detail::start_layout(s);
   layout.curves = {grid_curve(n, 10, 10, 10, 20), grid_curve(n, 10, 10, 20, 20),
                    grid_curve(n, 10, 10, 0, 10)};
   for (auto& c : layout.curves) c.direction.assign(c.vertices.size(), Vec3(1, 0, 0));
@@ -950,12 +951,12 @@ TEST(Quad, ACuspPatchCollapsesOntoOneCurve) {
     layout.curves.push_back(grid_curve(n, 0, 10, 40, 10));
     layout.curves.push_back(c);
     for (int k = 5; k < 7; ++k) quad_detail::register_curve(s, layout, k);
-    Diagnostics diagnostics;
-    quad_detail::PatchLayout patches = quad_detail::build_patches(s, layout, options, diagnostics);
+    quad_detail::Messages messages;
+    quad_detail::PatchLayout patches = quad_detail::build_patches(s, layout, options, messages);
     std::string failure;
     bool relaxed = false;
     EXPECT_TRUE(quad_detail::quantize(patches, options, &failure, &relaxed)) << failure;
-    const QuadCage cage = quad_detail::fill_patches(s, layout, patches, diagnostics);
+    const QuadCage cage = quad_detail::fill_patches(s, layout, patches, messages);
     EXPECT_EQ(bad_flat_quads(cage), 0);
     std::map<int, int> quads_at;
     for (int q = 0; q < cage.quads.rows(); ++q)
@@ -1112,7 +1113,7 @@ TEST(Quad, DenseSingularitiesRaiseTheDensity) {
   ASSERT_EQ(plain.cages.size(), 1u);
   ASSERT_EQ(raised.cages.size(), 1u);
   const auto reports_raise = [](const QuadResult& result) {
-    for (const auto& d : result.diagnostics)
+    for (const auto& d : result.notes)
       if (d.find("density raised") != std::string::npos) return true;
     return false;
   };
@@ -1259,11 +1260,12 @@ TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
     auto notes = [](const QuadResult& q) {  // with the seconds they name blanked
       const std::regex seconds("[0-9.]+ s\\b");
       std::vector<std::string> kept;
-      for (const auto& d : q.diagnostics) kept.push_back(std::regex_replace(d, seconds, "# s"));
+      for (const auto& d : q.notes) kept.push_back(std::regex_replace(d, seconds, "# s"));
+      for (const auto& d : q.diagnostics) kept.push_back("warning: " + d);
       return kept;
     };
     EXPECT_EQ(notes(one), notes(two)) << name;
-    EXPECT_TRUE(std::any_of(one.diagnostics.begin(), one.diagnostics.end(), [](const std::string& d) {
+    EXPECT_TRUE(std::any_of(one.notes.begin(), one.notes.end(), [](const std::string& d) {
       return d.find("uses the layout with") != std::string::npos;
     })) << name;
     ASSERT_EQ(one.cages.size(), two.cages.size()) << name;

@@ -279,14 +279,23 @@ def test_progress_printer_prints_stage_starts_and_quarters():
 REPORT = {"stages": {"mesh": 0.25, "partition": 0.5}, "seconds_total": 0.75,
           "counts": {"triangles": 100, "per_solid": [1, 2]},
           "tolerance": {"mode": "grid", "value": 0.1}, "genbrep_version": "0.1.0",
-          "inputs": {"nested": "skipped"}, "diagnostics": ["loop 3 repaired"]}
+          "inputs": {"nested": "skipped"}, "diagnostics": ["loop 3 repaired"],
+          "notes": ["quad: component 0: corners squared"]}
 
 
 def test_report_lines():
     assert report.report_lines(REPORT, ["a note"]) == [
         "time: 0.75 s", "  mesh: 0.250 s", "  partition: 0.500 s", "counts:",
         "  triangles: 100", "  per_solid: 1, 2", "tolerance: mode grid, value 0.1",
-        "genbrep_version: 0.1.0", "note: a note", "warning: loop 3 repaired"]
+        "genbrep_version: 0.1.0", "note: a note", "note: quad: component 0: corners squared",
+        "warning: loop 3 repaired"]
+
+
+def test_notes_are_not_warnings():
+    assert report.warning_count(REPORT) == 1
+    assert report.warning_count(dict(REPORT, diagnostics=[])) == 0
+    summary = report.result_summary("part", {"report": dict(REPORT, diagnostics=[])})
+    assert "warning" not in summary
 
 
 def test_report_json_round_trip_with_numpy_values():

@@ -18,6 +18,18 @@
 
 namespace genbrep::quad_detail {
 
+// What a step says about its work, as QuadResult splits it: `warnings` where the cage
+// falls short of what was asked (a repair, a squeezed quad, a fallback), `notes` on how it
+// was made (refinement, collapsed slivers, the layout choice kept).
+struct Messages {
+  Diagnostics warnings;
+  Diagnostics notes;
+  void append(const Messages& other) {
+    warnings.insert(warnings.end(), other.warnings.begin(), other.warnings.end());
+    notes.insert(notes.end(), other.notes.begin(), other.notes.end());
+  }
+};
+
 // The design with one component's triangles split `levels` (≥ 1) times (refine.cpp): the same
 // surface, finer for tracing; vertex indices and the first child of every triangle keep
 // their index, so loops and singularities carry over unchanged.
@@ -94,7 +106,7 @@ struct Layout {
 };
 
 // Starts a layout from the component's loops (nodes at boundary singularities).
-Layout start_layout(const Surface& s, const Diagnostics& diagnostics);
+Layout start_layout(const Surface& s);
 // Marks curve c on the edge/halfedge tables (after its vertices and directions are set).
 void register_curve(const Surface& s, Layout& layout, int c);
 // Takes the stretch vertices[first..last] of open curve c off the layout; what remains
@@ -117,7 +129,7 @@ bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int las
                 double fraction, bool snap_to_field);
 // Separatrices of every interior singularity and concave boundary corner.
 void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& options,
-                        Diagnostics& diagnostics);
+                        Messages& messages);
 
 // The angle (radians, counter-clockwise) of the patch sector at from(h_out) between its
 // boundary halfedges h_out (leaving) and h_in (entering), read from the curves' tangents,
@@ -157,7 +169,7 @@ double side_target(const std::vector<Arc>& arcs, const Patch& patch, int k);
 // Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
 // disks with extra traces. Throws Error{StageFailure} if some patch stays invalid.
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
-                          Diagnostics& diagnostics);
+                          Messages& messages);
 
 // Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
 // integer program (quantize.cpp); false with the reason in `failure` if none exists.
@@ -329,6 +341,6 @@ QuadCage fallback_cage(const Surface& s, double coarse_edge_length);
 
 // Cage from the quantized layout.
 QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& patches,
-                      Diagnostics& diagnostics);
+                      Messages& messages);
 
 }  // namespace genbrep::quad_detail
