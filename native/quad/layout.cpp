@@ -263,6 +263,33 @@ int straighten_cusps(Layout& layout, const PatchLayout& patches, int patch) {
   return taken;
 }
 
+namespace {
+
+// What a round of build_patches reads and its fixes change: the curves (as a set: a curve
+// taken off leaves an empty slot, and one traced again is appended), the nodes, the
+// overridden corner readings and the wedges already cut.
+std::size_t round_state(const Layout& layout, const std::map<int, int>& quarter_override,
+                        const std::set<int>& wedge_tried) {
+  std::vector<std::size_t> curves;
+  for (const Curve& curve : layout.curves) {
+    if (curve.vertices.empty()) continue;
+    std::size_t key = curve.vertices.size() * 4 + curve.closed * 2 + curve.link;
+    for (int v : curve.vertices) key = key * 1000003u + static_cast<std::size_t>(v) + 1;
+    curves.push_back(key);
+  }
+  std::sort(curves.begin(), curves.end());
+  std::size_t key = curves.size();
+  auto mix = [&key](std::size_t value) { key = key * 1000003u + value + 1; };
+  for (std::size_t curve : curves) mix(curve);
+  for (std::size_t v = 0; v < layout.node.size(); ++v)
+    if (layout.node[v]) mix(v);
+  for (const auto& [h, quarters] : quarter_override) mix(static_cast<std::size_t>(h) * 8 + quarters);
+  for (int f : wedge_tried) mix(static_cast<std::size_t>(f));
+  return key;
+}
+
+}  // namespace
+
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
                           Messages& messages) {
   const std::string who = "component " + std::to_string(s.component);
@@ -272,7 +299,18 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
   for (size_t i = 0; i < layout.attractors.size() && i < layout.attractor_directions.size(); ++i)
     singular_valence[layout.attractors[i]] = static_cast<int>(layout.attractor_directions[i].size());
   PatchLayout out;
+  // The state at the start of each round: the fixes can cycle (a cut traced one round is
+  // taken off as dangling the next), and a repeated state repeats every round after it.
+  // (Taking the fixes' fallbacks instead of cuts from then on was tried: on the bench's
+  // 5 x 5 net it merged patches round after round and never made them disks.)
+  std::map<std::size_t, int> seen_states;
   for (int round = 0;; ++round) {
+    const auto [first_seen, fresh] =
+        seen_states.insert({round_state(layout, quarter_override, wedge_tried), round});
+    GENBREP_CHECK(fresh, Code::StageFailure,
+                  "quad: " + who + ": the extra cuts of round " + std::to_string(round) +
+                      " give back the layout of round " + std::to_string(first_seen->second) +
+                      "; some patches never become four-sided disks");
     build_arcs(s, layout, out);
     // Flood fill the component's faces across edges no curve runs along.
     const int nf = static_cast<int>(s.mesh.n_faces());

@@ -1241,6 +1241,34 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
   EXPECT_EQ(euler, 2 - 2 * 9 - scene.expected_loops);
 }
 
+// The extra cuts that make patches four-sided disks can cycle: on the 5 x 5 net at
+// h = 0.12 the requested layout's cut from a dangling separatrix's end pinches a patch whose
+// shortest open arc (the cut) is then taken off, leaving the dangling end again. The search
+// notices the layout it had two rounds before and gives up then, not after
+// max_fix_rounds (64) rounds of the same two layouts.
+TEST(Quad, ExtraCutsThatGiveBackAnEarlierLayoutStopThere) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.12, 5)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  QuadOptions options;
+  options.parallel_choices = 1;
+  options.seconds_per_component = 0;  // the requested layout only, then the fallback
+  const QuadResult result = extract_cages(r.mesh, r.partition, field, options, Context());
+  ASSERT_EQ(result.cages.size(), 1u);
+  EXPECT_EQ(check_cage(result.cages[0], r), 0);
+  const std::regex cycle("extra cuts of round ([0-9]+) give back the layout of round ([0-9]+)");
+  std::smatch match;
+  bool found = false;
+  for (const auto& d : result.diagnostics)
+    if (std::regex_search(d, match, cycle)) {
+      found = true;
+      const int round = std::stoi(match[1]), earlier = std::stoi(match[2]);
+      std::printf("[quad] net 5x5: the cuts of round %d gave back round %d's layout\n", round, earlier);
+      EXPECT_LT(earlier, round);
+      EXPECT_LT(round, options.max_fix_rounds);
+    }
+  EXPECT_TRUE(found) << "the requested layout did not stop on a repeated layout";
+}
+
 // Layout choices run two at a time give the cage they give one at a time: on arches
 // (the second choice beats the first) and boss (the first fails, the second is kept),
 // the same cage, stats and diagnostics, and the kept choice is not the requested one.
