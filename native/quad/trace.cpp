@@ -23,6 +23,7 @@ Surface::Surface(const TriMesh& m, const Partition& p, const CrossField& f, int 
   point.resize(nv);
   for (int v = 0; v < nv; ++v) point[v] = to_vec(m.point(m.vertex_handle(v)));
   face_normal.assign(nf, Vec3::Zero());
+  quads_on_face.assign(nf, 0.0);
   vertex_normal.assign(nv, Vec3::Zero());
   vertex_size.assign(nv, 0.0);
   std::vector<int> count(nv, 0);
@@ -32,6 +33,7 @@ Surface::Surface(const TriMesh& m, const Partition& p, const CrossField& f, int 
     const Vec3 n = (point[corner[1]] - point[corner[0]]).cross(point[corner[2]] - point[corner[0]]);
     face_normal[f] = n.norm() > 0 ? n.normalized() : Vec3(0, 0, 1);
     if (!in(f)) continue;
+    quads_on_face[f] = 0.5 * n.norm() / (field.size_u[f] * field.size_v[f]);
     const double size = 0.5 * (field.size_u[f] + field.size_v[f]);
     for (int v : corner) {
       vertex_normal[v] += n;
@@ -47,12 +49,6 @@ Surface::Surface(const TriMesh& m, const Partition& p, const CrossField& f, int 
   }
 }
 
-int Surface::face(int h) const {
-  const auto fh = mesh.face_handle(mesh.halfedge_handle(h));
-  return fh.is_valid() ? fh.idx() : -1;
-}
-int Surface::from(int h) const { return mesh.from_vertex_handle(mesh.halfedge_handle(h)).idx(); }
-int Surface::to(int h) const { return mesh.to_vertex_handle(mesh.halfedge_handle(h)).idx(); }
 int Surface::ccw(int h) const {
   return mesh.opposite_halfedge_handle(mesh.prev_halfedge_handle(mesh.halfedge_handle(h))).idx();
 }
@@ -79,14 +75,6 @@ double Surface::size_along(int f, const Vec3& d) const {
 Vec3 Surface::tangent(int v, const Vec3& d) const {
   const Vec3 t = d - vertex_normal[v] * vertex_normal[v].dot(d);
   return t.norm() > 1e-12 ? t.normalized() : d.normalized();
-}
-
-double Surface::face_quads(int f) const {
-  Vec3 corner[3];
-  int k = 0;
-  for (auto v : mesh.fv_range(mesh.face_handle(f))) corner[k++] = point[v.idx()];
-  const double area = 0.5 * (corner[1] - corner[0]).cross(corner[2] - corner[0]).norm();
-  return area / (field.size_u[f] * field.size_v[f]);
 }
 
 void register_curve(const Surface& s, Layout& layout, int c) {

@@ -56,10 +56,16 @@ struct Surface {
   std::vector<double> vertex_size;  // mean target edge length of the component faces around
   std::vector<int> vertices;        // vertices touched by the component's faces
   bool in(int face) const { return face >= 0 && partition.face_component[face] == component; }
-  // Face of the halfedge (-1 at a mesh border).
-  int face(int halfedge) const;
-  int from(int halfedge) const;
-  int to(int halfedge) const;
+  // Face of the halfedge (-1 at a mesh border). Inline: the layout's flood fill and
+  // patch examination call these for every halfedge of the component, every round.
+  int face(int halfedge) const {
+    const auto fh = mesh.face_handle(mesh.halfedge_handle(halfedge));
+    return fh.is_valid() ? fh.idx() : -1;
+  }
+  int from(int halfedge) const {
+    return mesh.from_vertex_handle(mesh.halfedge_handle(halfedge)).idx();
+  }
+  int to(int halfedge) const { return mesh.to_vertex_handle(mesh.halfedge_handle(halfedge)).idx(); }
   int opposite(int halfedge) const { return halfedge ^ 1; }
   // Next outgoing halfedge counter-clockwise around from(h): the face between them is face(h).
   int ccw(int halfedge) const;
@@ -69,8 +75,9 @@ struct Surface {
   // Target edge length along direction d on `face` (size_u or size_v, whichever arm d follows).
   double size_along(int face, const Vec3& d) const;
   Vec3 tangent(int vertex, const Vec3& d) const;  // d projected into the vertex tangent plane
-  // Quads the field's sizes put on `face` at density 1: area / (size_u · size_v).
-  double face_quads(int face) const;
+  // Quads the field's sizes put on a component face at density 1: area / (size_u · size_v).
+  double face_quads(int face) const { return quads_on_face[face]; }
+  std::vector<double> quads_on_face;  // per face; 0 off the component
 };
 
 // Layout curves: the component's loops first (closed), then traced separatrices (open,
