@@ -60,9 +60,11 @@ int main(int argc, char** argv) {
               result.partition.organic_components, result.partition.loops.size());
   int fallback = 0, quads = 0;
   for (const QuadStats& q : result.quads.stats) fallback += q.fallback, quads += q.quads;
-  std::printf("cages: %zu (%d quads; %d of them the fallback), composed: %s\n",
+  std::printf("cages: %zu (%d quads; %d of them the fallback), composed: %s (contact %.1f s, "
+              "Booleans %.1f s)\n",
               result.quads.cages.size(), quads, fallback,
-              result.composed.report.ok ? "ok" : "NOT ok");
+              result.composed.report.ok ? "ok" : "NOT ok", result.composed.report.seconds_contact,
+              result.composed.report.seconds_boolean);
   for (size_t c = 0; c < result.quads.stats.size(); ++c) {
     const QuadStats& q = result.quads.stats[c];
     std::printf("  cage %zu: %d quads, interior valence 4 %.1f%%, boundary valence 3 %.1f%%, mean corner "
