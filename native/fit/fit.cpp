@@ -473,7 +473,11 @@ Fitted fit_cage(const QuadCage& initial, const TriangleMesh& region,
         for (int v : chain) free[v] = 0;
     run.stiff.assign(f.cage.vertices.rows(), 1.0);
     int smoothed_points = 0;
-    for (int round = 0; round < options.fold_smoothing_rounds && !folded.empty(); ++round) {
+    for (int round = 0, before = static_cast<int>(folded.size());
+         !folded.empty() && round < 2 * options.fold_smoothing_rounds; ++round) {
+      // Past the rounds asked for, only while the folds keep shrinking.
+      if (round >= options.fold_smoothing_rounds && static_cast<int>(folded.size()) >= before) break;
+      before = static_cast<int>(folded.size());
       // The folded quads' corners and the corners of the quads within fold_rings of them.
       std::vector<char> ring(f.cage.vertices.rows(), 0);
       for (int q : folded)

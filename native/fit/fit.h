@@ -151,7 +151,8 @@ struct FitOptions {
   // that folds the surface where the initial cage's does not is undone (0: no test).
   int fold_check_samples = 4;
   // A fit that folds is first repeated with the fairness of the control points around the
-  // folded quads multiplied by fold_stiffness (compounding), at most this many times.
+  // folded quads multiplied by fold_stiffness (compounding), this many times, and then
+  // again while each round leaves fewer folded quads, up to twice as many times.
   int fold_smoothing_rounds = 3;
   double fold_stiffness = 30;
   int fold_rings = 2;  // quad rings around the folded quads whose corners are held smoother

@@ -587,6 +587,31 @@ TEST(Fit, AFoldSmoothedIntoASurfaceThatStraysIsUndoneToo) {
   EXPECT_TRUE(strays);
 }
 
+// Fold smoothing goes on past the rounds asked for while each round leaves fewer folded
+// quads: the tube's region with its +x half pushed towards −x, by 0.5 at the bottom and
+// 1 at the top, folds the plain fit (10 quads); one round held smoother leaves 6, a second
+// none. Asked for one round, the fit takes two and keeps the unfolded surface (the 8 x 8
+// net needed four: 49, 18, 3, 2, 0 folded quads).
+TEST(Fit, FoldSmoothingGoesOnWhileTheFoldsShrink) {
+  Fixture f = tube_fixture(0.05, 0.8, 16, 4);
+  for (Eigen::Index i = 0; i < f.region.vertices.rows(); ++i)
+    if (f.region.vertices(i, 0) > 0) f.region.vertices(i, 0) -= 0.5 + 0.5 * (f.region.vertices(i, 2) + 0.8) / 1.6;
+  f.curves.clear();
+  FitOptions plain_options;
+  plain_options.fold_check_samples = 0;
+  ASSERT_TRUE(limit_folds(fit_cage(f.cage, f.region, f.curves, plain_options, Context()).cage));
+  FitOptions options;
+  options.fold_smoothing_rounds = 1;
+  const Fitted fitted = fit_cage(f.cage, f.region, f.curves, options, Context());
+  print("graded fold", f, fitted.report);
+  EXPECT_FALSE(fitted.report.kept_initial);
+  EXPECT_FALSE(limit_folds(fitted.cage));
+  EXPECT_EQ(fitted.report.rounds, options.rounds + 2 * options.fold_smoothing_solves);
+  bool unfolded = false;
+  for (const auto& d : fitted.report.diagnostics) unfolded |= d.find("no longer does") != std::string::npos;
+  EXPECT_TRUE(unfolded);
+}
+
 // A cage whose own limit surface already intersects itself (the folded tube's plain fit)
 // has nothing to be undone to: fitted again, the fit is kept, and the report says that
 // both fold rather than saying nothing.
