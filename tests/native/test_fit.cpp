@@ -3,6 +3,7 @@
 // a signed distance on a grid of spacing h, as a generative solver gives them).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -524,6 +525,12 @@ TEST(Fit, BoundaryTightSplitsBoundaryChordsUntilTheCurveHolds) {
   EXPECT_GT(fitted.cage.boundary_chains[0].size(), 4u);
 }
 
+// Whether one of the report's diagnostics contains `text`.
+bool says(const FitReport& report, const std::string& text) {
+  return std::any_of(report.diagnostics.begin(), report.diagnostics.end(),
+                     [&](const std::string& d) { return d.find(text) != std::string::npos; });
+}
+
 // Independent of fit.cpp: whether the limit surface of a cage, tessellated with 4 segments
 // per quad edge, intersects itself (CGAL, exact predicates).
 bool limit_folds(const QuadCage& cage) {
@@ -566,9 +573,7 @@ TEST(Fit, AFitThatFoldsTheSurfaceIsUndone) {
   EXPECT_FALSE(limit_folds(checked.cage));
   ASSERT_EQ(checked.cage.vertices.rows(), f.cage.vertices.rows());
   EXPECT_EQ((checked.cage.vertices - f.cage.vertices).norm(), 0.0);
-  bool reported = false;
-  for (const auto& d : checked.report.diagnostics) reported |= d.find("kept unfitted") != std::string::npos;
-  EXPECT_TRUE(reported);
+  EXPECT_TRUE(says(checked.report, "kept unfitted"));
 }
 
 // With fold smoothing (the default) the same fit is repeated with the control points
@@ -582,9 +587,7 @@ TEST(Fit, AFoldSmoothedIntoASurfaceThatStraysIsUndoneToo) {
   EXPECT_TRUE(checked.report.kept_initial);
   EXPECT_FALSE(limit_folds(checked.cage));
   EXPECT_EQ((checked.cage.vertices - f.cage.vertices).norm(), 0.0);
-  bool strays = false;
-  for (const auto& d : checked.report.diagnostics) strays |= d.find("held smoother it strays") != std::string::npos;
-  EXPECT_TRUE(strays);
+  EXPECT_TRUE(says(checked.report, "held smoother it strays"));
 }
 
 // Fold smoothing goes on past the rounds asked for while each round leaves fewer folded
@@ -607,9 +610,7 @@ TEST(Fit, FoldSmoothingGoesOnWhileTheFoldsShrink) {
   EXPECT_FALSE(fitted.report.kept_initial);
   EXPECT_FALSE(limit_folds(fitted.cage));
   EXPECT_EQ(fitted.report.rounds, options.rounds + 2 * options.fold_smoothing_solves);
-  bool unfolded = false;
-  for (const auto& d : fitted.report.diagnostics) unfolded |= d.find("no longer does") != std::string::npos;
-  EXPECT_TRUE(unfolded);
+  EXPECT_TRUE(says(fitted.report, "no longer does"));
 }
 
 // A cage whose own limit surface already intersects itself (the folded tube's plain fit)
@@ -624,10 +625,7 @@ TEST(Fit, AFoldTheInitialCageAlreadyHasIsReported) {
   const Fitted again = fit_cage(plain.cage, f.region, f.curves, FitOptions(), Context());
   EXPECT_FALSE(again.report.kept_initial);
   EXPECT_TRUE(limit_folds(again.cage));
-  bool reported = false;
-  for (const auto& d : again.report.diagnostics)
-    reported |= d.find("and so does the initial cage's") != std::string::npos;
-  EXPECT_TRUE(reported);
+  EXPECT_TRUE(says(again.report, "and so does the initial cage's"));
 }
 
 // A region about as coarse as the cage (368 vertices, 386 control points: a density raised
