@@ -266,6 +266,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
   report["diagnostics"] = diagnostics;
   // How the stages did their work, apart from the warnings above: nothing to act on.
   json notes = json::array();
+  for (const auto& d : result.relaxed.notes) notes.push_back(d);
   for (const auto& d : result.field.notes) notes.push_back(d);
   for (const auto& d : result.quads.notes) notes.push_back("quad: " + d);
   report["notes"] = notes;

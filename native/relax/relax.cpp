@@ -322,7 +322,7 @@ Relaxed relax(const TriangleMesh& design, const Partition& partition, const Rela
           repair_folds(unfolded, remeshed.labels, originals.find(remeshed.mesh), projector);
       remeshed.mesh = to_arrays(unfolded);
       if (folds.folded > 0) {
-        out.diagnostics.push_back("channel remesh: unfolded " +
+        (folds.remaining ? out.diagnostics : out.notes).push_back("channel remesh: unfolded " +
                                   std::to_string(folds.folded - folds.remaining) + " of " +
                                   std::to_string(folds.folded) + " folded triangles");
       }
@@ -366,14 +366,14 @@ Relaxed relax(const TriangleMesh& design, const Partition& partition, const Rela
       current = smoothed;
       out.skipped_moves = smoothing.skipped_moves;
       if (smoothing.skipped_moves > 0) {
-        out.diagnostics.push_back(
+        out.notes.push_back(
             std::to_string(smoothing.skipped_moves) + " of " +
             std::to_string(smoothing.skipped_moves + smoothing.accepted_moves) +
             " loop smoothing moves skipped (a flip, or beyond d)");
       }
       if (smoothing.fixed_vertices > 0) {
-        out.diagnostics.push_back(std::to_string(smoothing.fixed_vertices) +
-                                  " loop vertices kept in place where label borders meet");
+        out.notes.push_back(std::to_string(smoothing.fixed_vertices) +
+                            " loop vertices kept in place where label borders meet");
       }
     } else {
       out.diagnostics.push_back("loop smoothing undone: " + problem);

@@ -91,7 +91,8 @@ struct Relaxed {
   int channel_triangles = 0;  // input triangles in the remeshed channel
   bool remeshed = false;      // step (a) kept
   int skipped_moves = 0;      // smoothing moves refused to keep the guarantees
-  Diagnostics diagnostics;
+  Diagnostics diagnostics;    // warnings: a step undone, folds left after the remesh
+  Diagnostics notes;          // how it went: folds repaired, moves skipped, vertices kept
 };
 
 // The shape statistics of a closed vertex cycle of `mesh` (used before and after).

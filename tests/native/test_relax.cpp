@@ -102,7 +102,8 @@ TEST_P(RelaxScenes, SmoothsLoopsOnTheDesignSurface) {
       r.tolerance, r.remeshed, r.organic_area_before, r.organic_area_after,
       100 * (r.organic_area_after - r.organic_area_before) / r.organic_area_before,
       r.max_displacement, r.max_displacement / r.tolerance, r.skipped_moves);
-  for (const auto& d : r.diagnostics) std::printf("  diagnostic: %s\n", d.c_str());
+  for (const auto& d : r.diagnostics) std::printf("  warning: %s\n", d.c_str());
+  for (const auto& d : r.notes) std::printf("  note: %s\n", d.c_str());
   EXPECT_TRUE(r.remeshed) << p.name;
 
   // Same topology of the partition; a valid closed mesh with provenance.

@@ -42,7 +42,8 @@ Partitioned relaxed(const Partitioned& r) {
   const Relaxed x = relax(r.design, r.partition, {}, Context());
   Partitioned out(x.design);
   out.partition = x.partition;
-  for (const auto& d : x.diagnostics) std::printf("[relax] %s\n", d.c_str());
+  for (const auto& d : x.diagnostics) std::printf("[relax] warning: %s\n", d.c_str());
+  for (const auto& d : x.notes) std::printf("[relax] %s\n", d.c_str());
   return out;
 }
 
