@@ -300,9 +300,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     singular_valence[layout.attractors[i]] = static_cast<int>(layout.attractor_directions[i].size());
   PatchLayout out;
   // The state at the start of each round: the fixes can cycle (a cut traced one round is
-  // taken off as dangling the next), and a repeated state repeats every round after it.
-  // (Taking the fixes' fallbacks instead of cuts from then on was tried: on the bench's
-  // 5 x 5 net it merged patches round after round and never made them disks.)
+  // taken off as the shortest arc of a patch it pinched the next), and a state seen
+  // before only leads through the same rounds again.
   std::map<std::size_t, int> seen_states;
   for (int round = 0;; ++round) {
     const auto [first_seen, fresh] =

@@ -274,6 +274,12 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   return stats;
 }
 
+// A step's warnings go to the result's diagnostics, its notes to its notes.
+void add_messages(const quad_detail::Messages& messages, QuadResult* out) {
+  out->diagnostics.insert(out->diagnostics.end(), messages.warnings.begin(), messages.warnings.end());
+  out->notes.insert(out->notes.end(), messages.notes.begin(), messages.notes.end());
+}
+
 // The kept cage's corners are squared (square_cage: 10 sweeps), kept if it stays valid and
 // its corners come closer to 90°. Only the kept cage: layout choices are compared as
 // filled and evened out, where a distorted layout (a fan of rows over collapsed slivers)
@@ -755,9 +761,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     }
   }
   if (best >= 0) {
-    out->diagnostics.insert(out->diagnostics.end(), best_messages.warnings.begin(),
-                            best_messages.warnings.end());
-    out->notes.insert(out->notes.end(), best_messages.notes.begin(), best_messages.notes.end());
+    add_messages(best_messages, out);
     if (best > 0) {
       std::string why = "the requested one failed: " + requested_failure;
       if (requested_stats && !meets_targets(*requested_stats)) {
@@ -833,9 +837,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       first_failure + "); the cage is the FALLBACK: a coarse remesh (edge " + scale_text +
       " x the target) split into quads, not aligned with the field, "
       "with irregular vertices wherever triangles could not be paired");
-  out->diagnostics.insert(out->diagnostics.end(), untangled.warnings.begin(),
-                         untangled.warnings.end());
-  out->notes.insert(out->notes.end(), untangled.notes.begin(), untangled.notes.end());
+  add_messages(untangled, out);
   square_kept(checks, variants[0].options.density / scale, c, &cage, &stats, &out->notes);
   stats.irregular_off_singularities =
       quad_detail::irregular_off_singularities(checks, cage, singular, variants[0].options.density);
