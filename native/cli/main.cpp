@@ -4,6 +4,7 @@
 // exits non-zero with one line naming the file and the problem; it never crashes.
 #include <filesystem>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "pipeline/output.h"
@@ -120,6 +121,14 @@ Command parse(int argc, char** argv) {
   return cmd;
 }
 
+// The report's warnings ('diagnostics'), one line each on standard error, so a batch run
+// shows them without opening report.json; its notes (how the stages worked) stay there.
+void print_warnings(const std::string& report_json) {
+  const auto report = nlohmann::json::parse(report_json);
+  for (const auto& warning : report.value("diagnostics", nlohmann::json::array()))
+    std::cerr << "genbrep: warning: " << warning.get<std::string>() << '\n';
+}
+
 int run_convert(int argc, char** argv) {
   Command cmd = parse(argc, argv);
   const Result result = convert(cmd.inputs, cmd.options, Context());
@@ -127,6 +136,7 @@ int run_convert(int argc, char** argv) {
   fs::create_directories(cmd.out, ec);
   if (ec) throw Error(Code::FileError, "cannot create '" + cmd.out.string() + "': " + ec.message());
   write_text_file((cmd.out / "report.json").string(), result.report_json);
+  print_warnings(result.report_json);
   std::cout << "wrote " << (cmd.out / "report.json").string();
   if (ran(result, "partition")) {
     write_partition_ply((cmd.out / "partition.ply").string(), result.design, result.partition);
@@ -195,6 +205,7 @@ int run_compose(int argc, char** argv) {
   fs::create_directories(out, ec);
   if (ec) throw Error(Code::FileError, "cannot create '" + out.string() + "': " + ec.message());
   write_text_file((out / "report.json").string(), result.report_json);
+  print_warnings(result.report_json);
   std::cout << "wrote " << (out / "report.json").string() << '\n';
   if (!result.composed.report.ok) {
     std::cout << "not composed: see the diagnostics in report.json\n";

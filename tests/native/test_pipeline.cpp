@@ -149,6 +149,35 @@ TEST(Cli, ConvertsTwoArchesAndWritesReportAndPartition) {
   EXPECT_EQ(body, static_cast<size_t>(vertices) * 24 + static_cast<size_t>(faces) * (1 + 12 + 8));
 }
 
+// Each of the report's warnings is one "genbrep: warning:" line on standard error; notes
+// are not. Boss through quad warns (quads squeezed beyond 2.5x the target); the two
+// arches, a clean run, print no warning.
+TEST(Cli, WarningsGoToStandardErrorAndNotesDoNot) {
+  const fs::path boss = fs::path(__FILE__).parent_path() / "../../blend_fixtures/obj/boss";
+  const fs::path dir = temp_dir("warnings");
+  const CliRun run = run_cli("convert --design " + (boss / "design_design.obj").string() +
+                                 " --keep-in " + (boss / "boss_keep_in.obj").string() +
+                                 " --keep-in " + (boss / "mount_keep_in.obj").string() +
+                                 " --keep-out " + (boss / "bolt_keep_out.obj").string() +
+                                 " --grid 0.037,0.029,0.041,0.1 --until quad --out " +
+                                 (dir / "out").string(),
+                             dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto report = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
+  ASSERT_FALSE(report["diagnostics"].empty());
+  ASSERT_FALSE(report["notes"].empty());
+  std::string expected;
+  for (const auto& warning : report["diagnostics"])
+    expected += "genbrep: warning: " + warning.get<std::string>() + "\n";
+  EXPECT_EQ(run.err, expected);
+  const fs::path clean = temp_dir("no_warnings");
+  const CliRun arches = run_cli("convert " + write_scene(two_arches_scene(0.06), clean) +
+                                    " --until quad --out " + (clean / "out").string(),
+                                clean);
+  ASSERT_EQ(arches.exit_code, 0) << arches.err;
+  EXPECT_EQ(arches.err, "");
+}
+
 TEST(Cli, GridModeFromTheCommandLine) {
   const fs::path dir = temp_dir("grid");
   const Scene s = tube_scene(0.06);
