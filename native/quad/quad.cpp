@@ -169,9 +169,9 @@ QuadStats quad_detail::measure_cage(const QuadCage& cage, const DesignNormals& n
     }
     bool degenerate = repeated;
     for (int k = 0; k < 4; ++k) {
-      const Vec3 a = c[(k + 1) % 4] - c[k], b = c[(k + 3) % 4] - c[k];
-      const double angle = std::atan2(a.cross(b).norm(), a.dot(b)) * 180 / kPi;
-      degenerate |= angle < 1 || a.norm() == 0 || b.norm() == 0;
+      const double angle =
+          quad_detail::corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi;
+      degenerate |= angle < 1 || c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k];
       const double deviation = std::abs(angle - 90);
       angle_sum += deviation;
       stats.max_angle_deviation_deg = std::max(stats.max_angle_deviation_deg, deviation);

@@ -17,6 +17,12 @@
 #include "quad/detail/layout.h"
 
 namespace genbrep::quad_detail {
+
+double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b) {
+  const Vec3 u = a - at, w = b - at;
+  return std::atan2(u.cross(w).norm(), u.dot(w));
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -32,12 +38,6 @@ constexpr double kStretchWeight = 1.0;
 // length, squared) costs against corners; without it squaring makes the rows wave (on
 // the 5x5 net, 11.1° -> 6.8° but rows 30% less even; with it 7.9°, rows as even as filled).
 constexpr double kFairWeight = 1.0;
-
-// The angle at `at` between the edges to a and b, in radians.
-double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b) {
-  const Vec3 u = a - at, w = b - at;
-  return std::atan2(u.cross(w).norm(), u.dot(w));
-}
 
 // A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
 // or against the component face under its centroid.

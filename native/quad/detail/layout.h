@@ -342,6 +342,10 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
 // deviation (quad.cpp).
 bool better_cage(const QuadStats& a, const QuadStats& b);
 
+// The angle at `at` between the edges to a and b, in radians (measure_cage, the untangle,
+// the squaring).
+double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b);
+
 // Last resort: a pure-quad cage that is not field-aligned (fallback.cpp), from a coarse
 // remesh at `coarse_edge_length` split once (cage edges about half that long).
 QuadCage fallback_cage(const Surface& s, double coarse_edge_length);
