@@ -167,10 +167,10 @@ void bind_fit(py::module_& m) {
       },
       py::arg("vertices"), py::arg("quads"), py::arg("boundary_chains"), py::arg("region_vertices"),
       py::arg("region_faces"), py::arg("boundary_curves"), py::arg("strategy") = "smooth",
-      py::arg("delta") = 0.0, py::arg("rounds") = 4, py::arg("fairness_weight") = 1e-3,
+      py::arg("delta") = 0.0, py::arg("rounds") = 4, py::arg("fairness_weight") = 0.3,
       py::arg("max_control_points") = 20000,
       "fit_cage(vertices, quads, boundary_chains, region_vertices, region_faces, boundary_curves,\n"
-      "         strategy='smooth', delta=0, rounds=4, fairness_weight=1e-3, "
+      "         strategy='smooth', delta=0, rounds=4, fairness_weight=0.3, "
       "max_control_points=20000)\n"
       "-> dict(vertices, quads, boundary_chains, report)\n\n"
       "Fits one cage (boundary 'ALL', quality 3) to one region; boundary_curves[i] (closed\n"
