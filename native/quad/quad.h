@@ -105,6 +105,12 @@ struct QuadOptions {
   // before; the search stops at once when a cage meets the targets with a margin. 6e5: all
   // choices on components of ≤ 25k triangles, 3 on lattice's 190k.
   double work_after_meeting = 6e5;
+  // Quantization's integer program stops once its solution is provably within this
+  // fraction of the optimal cost (GLPK's mip_gap). A genus-64 net's programs (7–8k arcs)
+  // then stop in 2–4 s instead of running into the time limit (below) at a gap of 0.1%,
+  // whose solution depended on the machine's speed; the fixtures' programs are solved at
+  // the root or within a few nodes either way.
+  double quantize_gap = 0.005;
   // Wall-clock seconds per component for trying layout choices: once spent, no further
   // choice starts (the requested one always runs) and the best cage so far is kept, or the
   // fallback cage if none is valid; each integer program gets at most the time left

@@ -16,8 +16,12 @@
 // constraints are homogeneous, so an integer solution exists whenever a real one does
 // (twice a half-integral solution), and branch-and-cut finds the nearest.
 // Complexity: arcs · segments columns (segments ≈ 8 + 2 log t); the fixtures' layouts (≤ a
-// few hundred arcs) solve in milliseconds, a genus-64 net's (6–20k arcs) takes 10 s or
-// more. A time limit (10 s, or the component's time left) keeps the best solution found.
+// few hundred arcs) solve in milliseconds, a genus-64 net's (6–20k arcs) took 10 s or more
+// to prove optimality. The search stops once its solution is provably within
+// QuadOptions::quantize_gap of the optimum (a genus-64 net's: 2–4 s, 40–140 nodes), which
+// depends on the problem only, so the counts are the same on every run; a time limit
+// (10 s, or the component's time left) stays as a last resort and keeps the best solution
+// found — only then does the result depend on the machine.
 #include <glpk.h>
 
 #include <algorithm>
@@ -194,9 +198,21 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   parameters.msg_lev = GLP_MSG_OFF;
   parameters.presolve = GLP_ON;
   parameters.tm_lim = static_cast<int>(1000 * std::max(seconds, 1.0));
+  parameters.mip_gap = options.quantize_gap;
+  // The branch-and-bound nodes created so far, read whenever GLPK selects the next one.
+  int nodes = 0;
+  parameters.cb_info = &nodes;
+  parameters.cb_func = [](glp_tree* tree, void* info) {
+    if (glp_ios_reason(tree) != GLP_ISELECT) return;
+    int active = 0, current = 0, total = 0;
+    glp_ios_tree_size(tree, &active, &current, &total);
+    *static_cast<int*>(info) = total;
+  };
   const int code = glp_intopt(lp, &parameters);
+  layout.quantize_nodes = nodes;
   const int status = glp_mip_status(lp);
-  if ((code != 0 && code != GLP_ETMLIM) || (status != GLP_OPT && status != GLP_FEAS)) {
+  const bool stopped_with_solution = code == GLP_EMIPGAP || code == GLP_ETMLIM;
+  if ((code != 0 && !stopped_with_solution) || (status != GLP_OPT && status != GLP_FEAS)) {
     *failure = code == GLP_ENOPFS || status == GLP_NOFEAS
                    ? "no integer counts make opposite sides equal (" + std::to_string(rows.size()) +
                          " side constraints)"
@@ -204,6 +220,7 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
                          std::to_string(code) + ")";
     return false;
   }
+  layout.quantize_cost = glp_mip_obj_val(lp);
   for (int a = 0; a < arcs; ++a) {
     const int v = find(a);
     double n = base[v];

@@ -168,6 +168,9 @@ struct PatchLayout {
   int recornered = 0;
   int cusps = 0;  // patches with a cusp corner (an empty side), collapsed by quantization
   int removed_stretches = 0;
+  // Of quantize's last integer program: its cost and the branch-and-bound nodes it took.
+  double quantize_cost = 0;
+  int quantize_nodes = 0;
 };
 
 // Σ target (length / local size, at density 1) of the arcs on side k of `patch`.
@@ -181,7 +184,8 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 // Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
 // integer program (quantize.cpp); false with the reason in `failure` if none exists.
 // `relaxed`: the layout needed long interior arcs at 0 edges to balance (reported).
-// `seconds`: time limit of each integer program solve (at least 1 s).
+// `seconds`: time limit of each integer program solve (at least 1 s); each stops earlier
+// once within options.quantize_gap of the optimum.
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
               bool* relaxed, double seconds = 10);
 // Frees the calling thread's integer-programming state (GLPK keeps one per thread); for
