@@ -304,6 +304,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
   // before only leads through the same rounds again.
   std::map<std::size_t, int> seen_states;
   for (int round = 0;; ++round) {
+    ++layout.patch_rounds;
     const auto [first_seen, fresh] =
         seen_states.insert({round_state(layout, quarter_override, wedge_tried), round});
     GENBREP_CHECK(fresh, Code::StageFailure,

@@ -384,17 +384,38 @@ struct LayoutKeys {
   std::optional<std::size_t> traced, quantized;
 };
 
+// An attempt's work (QuadOptions::work_per_component) when it reached each fingerprint and
+// at its end: a choice whose layout the search has already seen is charged only what the
+// search one choice at a time would have spent on it, up to the fingerprint that repeats.
+struct AttemptWork {
+  double traced = 0, quantized = 0, total = 0;
+};
+
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
 // is in `seen` (a layout an earlier choice already had). Reads only its arguments, so
 // attempts run on several threads at once.
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
-                  const QuadOptions& options, double solve_seconds,
-                  const std::set<std::size_t>& seen, LayoutKeys* keys, QuadCage* cage,
-                  QuadStats* stats, quad_detail::Messages* messages) {
+                  const QuadOptions& options, const std::set<std::size_t>& seen,
+                  LayoutKeys* keys, QuadCage* cage, QuadStats* stats,
+                  quad_detail::Messages* messages, AttemptWork* work) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface);
+  // The work so far: tracing, rounds of building patches, branch-and-bound nodes × arcs
+  // of quantization, quads filled (weights: QuadOptions::work_per_component).
+  const double triangles = static_cast<double>(surface.mesh.n_faces());
+  double branching = 0;
+  auto work_so_far = [&] {
+    return triangles * (2 + layout.patch_rounds) + 15 * branching +
+           850 * static_cast<double>(cage->quads.rows());
+  };
+  // Also when the attempt fails part way.
+  struct Tally {
+    std::function<double()> so_far;
+    double* total;
+    ~Tally() { *total = so_far(); }
+  } tally{work_so_far, &work->total};
   quad_detail::trace_separatrices(surface, layout, options, *messages);
   // The rest is deterministic in the traced curves and the options it reads: a choice
   // that traced the same curves as an earlier one with the same options gives its result.
@@ -403,6 +424,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   for (const auto& curve : layout.curves)
     for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
   keys->traced = traced;
+  work->traced = work_so_far();
   GENBREP_CHECK(!seen.count(traced), Code::StageFailure, same_layout(c));
   // A layout whose sides cannot balance (a strip that would need a loop arc at 0 edges)
   // has its unbalanced patches merged with a neighbour, a few rounds at most.
@@ -414,7 +436,10 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   for (int round = 0;; ++round) {
     layout_messages = {};
     patches = quad_detail::build_patches(surface, layout, options, layout_messages);
-    if (quad_detail::quantize(patches, options, &failure, &relaxed, solve_seconds)) break;
+    const bool quantized =
+        quad_detail::quantize(patches, options, &failure, &relaxed, options.quantize_seconds);
+    branching += static_cast<double>(patches.quantize_nodes) * static_cast<double>(patches.arcs.size());
+    if (quantized) break;
     int now = 0, taken = 0;
     // Cusp readings at an unbalanced patch are taken back first (always: they are readings,
     // not changes to the layout); only where there are none are the patches merged.
@@ -441,6 +466,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
       for (const auto& [a, reversed] : side)
         fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
   keys->quantized = fingerprint;
+  work->quantized = work_so_far();
   GENBREP_CHECK(!seen.count(fingerprint), Code::StageFailure, same_layout(c));
   messages->append(layout_messages);
   if (merged)
@@ -659,10 +685,17 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   int first_meeting = -1, tried_after_meeting = 0;
   const int choices_after_meeting =
       static_cast<int>(options.work_after_meeting / std::max(1, triangles));
-  const auto started = std::chrono::steady_clock::now();
-  auto seconds_left = [&]() {
-    return options.seconds_per_component -
-           std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  // The work the attempts spent, summed in choice order (QuadOptions::work_per_component).
+  double work_spent = 0;
+  auto out_of_work = [&](size_t tried) {
+    if (tried == 0 || work_spent < options.work_per_component) return false;
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "component %d: stopped trying layout choices after %.3g units of work "
+                  "(work_per_component), %zu of %zu tried",
+                  c, work_spent, tried, variants.size());
+    out->diagnostics.push_back(text);
+    return true;
   };
   // Choices run in batches of `threads` at once (each attempt reads only shared constant
   // data); their results are taken in order, exactly as if they had run one after another:
@@ -678,11 +711,12 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     QuadStats stats;
     quad_detail::Messages messages;
     std::exception_ptr error;
+    AttemptWork work;
   };
-  auto attempt = [&](size_t k, double seconds, Attempt* a) {
+  auto attempt = [&](size_t k, Attempt* a) {
     try {
-      extract_once(surface, checks, variants[k].options, seconds, seen_layouts, &a->keys,
-                   &a->cage, &a->stats, &a->messages);
+      extract_once(surface, checks, variants[k].options, seen_layouts, &a->keys, &a->cage,
+                   &a->stats, &a->messages, &a->work);
       a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
           checks, a->cage, singular, variants[k].options.density);
     } catch (...) {
@@ -691,43 +725,39 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   };
   bool stop = false;
   for (size_t k = 0; k < variants.size() && !stop;) {
-    if (k > 0 && seconds_left() <= 0) {
-      char text[200];
-      std::snprintf(text, sizeof text,
-                    "component %d: stopped trying layout choices after %.0f s "
-                    "(seconds_per_component), %zu of %zu tried",
-                    c, options.seconds_per_component - seconds_left(), k, variants.size());
-      out->diagnostics.push_back(text);
-      break;
-    }
+    if (out_of_work(k)) break;
     if (first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) break;
     const size_t batch = std::min(variants.size() - k, static_cast<size_t>(threads));
     std::vector<Attempt> attempts(batch);
-    const double seconds = std::clamp(seconds_left(), 1.0, 10.0);
     std::vector<std::thread> workers;
     for (size_t i = 1; i < batch; ++i)
       workers.emplace_back([&, i, first = k] {
-        attempt(first + i, seconds, &attempts[i]);
+        attempt(first + i, &attempts[i]);
         quad_detail::release_quantize_thread();
       });
-    attempt(k, k == 0 ? 10.0 : seconds, &attempts[0]);
+    attempt(k, &attempts[0]);
     for (auto& worker : workers) worker.join();
     for (size_t i = 0; i < batch && !stop; ++i, ++k) {
-      if (i > 0 && first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) {
+      if (i > 0 && ((first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) ||
+                    out_of_work(k))) {
         stop = true;
         break;
       }
       Attempt& a = attempts[i];
-      // Repeated layouts, as the sequential search sees them.
+      // Repeated layouts, as the sequential search sees them, and the work it would spend.
       bool grew = false, repeated = false;
+      double work = a.work.total;
       if (a.keys.traced) {
         repeated = seen_layouts.count(*a.keys.traced) > 0;
+        if (repeated) work = a.work.traced;
         if (!repeated) grew = seen_layouts.insert(*a.keys.traced).second;
       }
       if (!repeated && a.keys.quantized) {
         repeated = !seen_layouts.insert(*a.keys.quantized).second;
+        if (repeated) work = a.work.quantized;
         grew |= !repeated;
       }
+      work_spent += work;
       std::string failure;
       if (repeated) {
         failure = same_layout(c);

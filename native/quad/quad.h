@@ -111,15 +111,22 @@ struct QuadOptions {
   // whose solution depended on the machine's speed; the fixtures' programs are solved at
   // the root or within a few nodes either way.
   double quantize_gap = 0.005;
-  // Wall-clock seconds per component for trying layout choices: once spent, no further
-  // choice starts (the requested one always runs) and the best cage so far is kept, or the
-  // fallback cage if none is valid; each integer program gets at most the time left
-  // (between 1 and 10 s). A high-genus net of genus 64 (bench/run net) otherwise tried
-  // every choice at 10-40 s each.
-  double seconds_per_component = 60;
+  // Work per component for trying layout choices, counted from the attempts themselves so
+  // that the search stops at the same choice on every machine and at any load: tracing
+  // counts 2 per triangle of the (refined) component, each round of building patches 1
+  // per triangle, each branch-and-bound node of quantization 15 per arc, filling and
+  // untangling 850 per quad (weights from timing the genus-64 net's attempts: about 2.5
+  // million units per second of one core of the machine in README). Once the attempts
+  // taken in choice order have spent it, no further choice is taken (the requested one
+  // always runs) and the best cage so far is kept, or the fallback cage if none is valid.
+  // A genus-64 net (bench/run net8) otherwise tries every choice at 15-25 s each.
+  double work_per_component = 3e8;
+  // Each integer program's time limit, a last resort: quantization stops at quantize_gap
+  // first on every layout measured (a genus-64 net's within 4.3 s).
+  double quantize_seconds = 10;
   // Layout choices tried at once, each on its own thread (0: the machine's hardware
   // threads, at most 4). The kept cage does not depend on it: results are taken in
-  // choice order as if run one after another; the time budget is checked per batch.
+  // choice order as if run one after another, the work budget included.
   int parallel_choices = 0;
   // Global density multiplier on the field's sizes (2 ⇒ twice as many quads per side).
   double density = 1.0;

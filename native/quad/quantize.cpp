@@ -209,7 +209,7 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
     *static_cast<int*>(info) = total;
   };
   const int code = glp_intopt(lp, &parameters);
-  layout.quantize_nodes = nodes;
+  layout.quantize_nodes += std::max(nodes, 1);
   const int status = glp_mip_status(lp);
   const bool stopped_with_solution = code == GLP_EMIPGAP || code == GLP_ETMLIM;
   if ((code != 0 && !stopped_with_solution) || (status != GLP_OPT && status != GLP_FEAS)) {
@@ -288,6 +288,7 @@ bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* fail
   const int arcs = static_cast<int>(layout.arcs.size());
   const std::vector<int> sides_of = sides_per_arc(layout);
   *relaxed = false;
+  layout.quantize_nodes = 0;
   std::vector<int> lower(arcs, 1);
   for (int a = 0; a < arcs; ++a)
     if (sides_of[a] == 2 && layout.arcs[a].target * options.density < 1.0) lower[a] = 0;

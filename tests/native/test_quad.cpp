@@ -1179,11 +1179,13 @@ TEST(Quad, FallbackCageWhenNoLayoutWorks) {
   EXPECT_GT(s.interior_valence4_fraction(), 0.6);  // most vertices are edge midpoints
 }
 
-// The choices are tried only within the component's time (QuadOptions::
-// seconds_per_component): with none, only the first batch of choices runs (the requested
-// one alone with parallel_choices = 1; here every layout fails without extra cuts), the
-// fallback cage follows, and that is reported. With the default time all of them run first.
-TEST(Quad, LayoutChoicesStopWhenTheComponentsTimeIsSpent) {
+// The choices are tried only within the component's work (QuadOptions::
+// work_per_component), counted from the attempts in choice order: with none, only the
+// requested choice is taken, one or two at a time alike (here every layout fails without
+// extra cuts), the fallback cage follows, and that is reported. With the default budget
+// all of them run first; with a little more than the requested attempt's work, exactly two
+// are taken, one or two at a time alike.
+TEST(Quad, LayoutChoicesStopWhenTheComponentsWorkIsSpent) {
   const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   auto stopped = [](const QuadResult& result) {
@@ -1197,21 +1199,33 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsTimeIsSpent) {
   ASSERT_EQ(full.cages.size(), 1u);
   EXPECT_TRUE(full.stats[0].fallback);
   EXPECT_FALSE(stopped(full));
-  options.seconds_per_component = 0;
-  // Choices run in batches (QuadOptions::parallel_choices); the time is checked per batch.
-  for (int threads : {1, 2}) {
-    options.parallel_choices = threads;
-    const QuadResult limited = extract_cages(r.mesh, r.partition, field, options, Context());
-    ASSERT_EQ(limited.cages.size(), 1u);
-    EXPECT_TRUE(limited.stats[0].fallback);
-    ASSERT_TRUE(stopped(limited));
-    const std::string tried = ", " + std::to_string(threads) + " of ";
-    for (const auto& d : limited.diagnostics) {
-      if (d.find("stopped trying") != std::string::npos) {
-        EXPECT_NE(d.find(tried), std::string::npos) << d;
+  // Choices run in batches (QuadOptions::parallel_choices); the work is counted in order.
+  const std::regex spent("after ([0-9.e+]+) units of work \\(work_per_component\\), ([0-9]+) of ");
+  double requested_work = 0;
+  // 0 choices expected: a budget of 6 requested attempts' work, which ends the search
+  // among choices that repeat earlier layouts (charged as far as the repeat, one or two at
+  // a time alike).
+  for (const int expected : {1, 2, 0}) {
+    options.work_per_component = expected == 1 ? 0 : (expected == 2 ? 1.05 : 6) * requested_work;
+    std::vector<std::string> diagnostics[2];
+    for (int threads : {1, 2}) {
+      options.parallel_choices = threads;
+      const QuadResult limited = extract_cages(r.mesh, r.partition, field, options, Context());
+      ASSERT_EQ(limited.cages.size(), 1u);
+      EXPECT_TRUE(limited.stats[0].fallback);
+      ASSERT_TRUE(stopped(limited));
+      for (const auto& d : limited.diagnostics) {
+        std::smatch match;
+        if (!std::regex_search(d, match, spent)) continue;
+        if (expected) EXPECT_EQ(std::stoi(match[2]), expected) << d;
+        if (expected == 1) requested_work = std::stod(match[1]);
+        std::printf("[quad] budget %.3g: %s\n", options.work_per_component, d.c_str());
       }
+      EXPECT_EQ(check_cage(limited.cages[0], r), 0);
+      diagnostics[threads - 1] = limited.diagnostics;
     }
-    EXPECT_EQ(check_cage(limited.cages[0], r), 0);
+    EXPECT_EQ(diagnostics[0], diagnostics[1]);
+    ASSERT_GT(requested_work, 0);
   }
 }
 
@@ -1251,7 +1265,7 @@ TEST(Quad, ExtraCutsThatGiveBackAnEarlierLayoutStopThere) {
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   QuadOptions options;
   options.parallel_choices = 1;
-  options.seconds_per_component = 0;  // the requested layout only, then the fallback
+  options.work_per_component = 0;  // the requested layout only, then the fallback
   const QuadResult result = extract_cages(r.mesh, r.partition, field, options, Context());
   ASSERT_EQ(result.cages.size(), 1u);
   EXPECT_EQ(check_cage(result.cages[0], r), 0);
@@ -1331,6 +1345,19 @@ TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
       options.quad.parallel_choices = threads;
       return genbrep::convert({{"design", f.design}, f.solids}, options, Context()).quads;
     };
+    // With a work budget that ends the search (QuadOptions::work_per_component) too: a
+    // choice that repeats an earlier layout is charged only up to the repeat, however many
+    // ran at once (arches' second choice repeats its first one's quantized layout).
+    for (const double budget : {1.5e6, 2.5e6}) {
+      options.quad.work_per_component = budget;
+      const QuadResult one = run(1), two = run(2);
+      EXPECT_EQ(one.diagnostics, two.diagnostics) << name << ", budget " << budget;
+      EXPECT_EQ(one.notes.size(), two.notes.size()) << name << ", budget " << budget;
+      for (size_t c = 0; c < std::min(one.cages.size(), two.cages.size()); ++c)
+        EXPECT_EQ(one.cages[c].vertices, two.cages[c].vertices) << name << ", budget " << budget;
+      for (const auto& d : one.diagnostics) std::printf("[quad] %s, budget %.2g: %s\n", name, budget, d.c_str());
+    }
+    options.quad.work_per_component = QuadOptions{}.work_per_component;
     const QuadResult one = run(1), two = run(2);
     auto notes = [](const QuadResult& q) {  // with the seconds they name blanked
       const std::regex seconds("[0-9.]+ s\\b");

@@ -110,6 +110,7 @@ struct Layout {
   int separatrices = 0;
   int cancelled_pairs = 0;
   int dropped_traces = 0;
+  int patch_rounds = 0;  // build_patches rounds run on this layout (the search's work budget)
 };
 
 // Starts a layout from the component's loops (nodes at boundary singularities).
@@ -168,7 +169,8 @@ struct PatchLayout {
   int recornered = 0;
   int cusps = 0;  // patches with a cusp corner (an empty side), collapsed by quantization
   int removed_stretches = 0;
-  // Of quantize's last integer program: its cost and the branch-and-bound nodes it took.
+  // Of quantize's integer programs: the last one's cost, and the branch-and-bound nodes
+  // of all it solved (each counts at least its root).
   double quantize_cost = 0;
   int quantize_nodes = 0;
 };
