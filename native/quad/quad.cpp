@@ -436,8 +436,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   for (int round = 0;; ++round) {
     layout_messages = {};
     patches = quad_detail::build_patches(surface, layout, options, layout_messages);
-    const bool quantized =
-        quad_detail::quantize(patches, options, &failure, &relaxed, options.quantize_seconds);
+    const bool quantized = quad_detail::quantize(patches, options, &failure, &relaxed);
     branching += static_cast<double>(patches.quantize_nodes) * static_cast<double>(patches.arcs.size());
     if (quantized) break;
     int now = 0, taken = 0;

@@ -20,7 +20,7 @@
 // to prove optimality. The search stops once its solution is provably within
 // QuadOptions::quantize_gap of the optimum (a genus-64 net's: 2–4 s, 40–140 nodes), which
 // depends on the problem only, so the counts are the same on every run; a time limit
-// (10 s, or the component's time left) stays as a last resort and keeps the best solution
+// (QuadOptions::quantize_seconds, 10 s) stays as a last resort and keeps the best solution
 // found — only then does the result depend on the machine.
 #include <glpk.h>
 
@@ -74,7 +74,7 @@ std::vector<SideRow> side_rows(const PatchLayout& layout) {
 
 // One exact solve with per-arc lower bounds (0 or 1).
 bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<int>& lower,
-           double seconds, std::string* failure) {
+           std::string* failure) {
   const int arcs = static_cast<int>(layout.arcs.size());
   const std::vector<SideRow> rows = side_rows(layout);
   glp_term_out(GLP_OFF);
@@ -197,7 +197,7 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   glp_init_iocp(&parameters);
   parameters.msg_lev = GLP_MSG_OFF;
   parameters.presolve = GLP_ON;
-  parameters.tm_lim = static_cast<int>(1000 * std::max(seconds, 1.0));
+  parameters.tm_lim = static_cast<int>(1000 * std::max(options.quantize_seconds, 1.0));
   parameters.mip_gap = options.quantize_gap;
   // The branch-and-bound nodes created so far, read whenever GLPK selects the next one.
   int nodes = 0;
@@ -284,7 +284,7 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
 // with those bounds; then every interior arc may get 0 (reported by the caller as
 // collapsed patches), which the cost keeps to the fewest and shortest arcs.
 bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* failure,
-              bool* relaxed, double seconds) {
+              bool* relaxed) {
   const int arcs = static_cast<int>(layout.arcs.size());
   const std::vector<int> sides_of = sides_per_arc(layout);
   *relaxed = false;
@@ -293,7 +293,7 @@ bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* fail
   for (int a = 0; a < arcs; ++a)
     if (sides_of[a] == 2 && layout.arcs[a].target * options.density < 1.0) lower[a] = 0;
   for (int round = 0; round <= 4 * arcs; ++round) {
-    if (!solve(layout, options, lower, seconds, failure)) {
+    if (!solve(layout, options, lower, failure)) {
       if (*relaxed) return false;
       *relaxed = true;
       for (int a = 0; a < arcs; ++a)

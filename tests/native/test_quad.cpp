@@ -1301,9 +1301,10 @@ TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
     quad_detail::PatchLayout patches = built;
     QuadOptions options;
     options.quantize_gap = gap;
+    options.quantize_seconds = seconds;
     std::string failure;
     bool relaxed_bounds = false;
-    EXPECT_TRUE(quad_detail::quantize(patches, options, &failure, &relaxed_bounds, seconds)) << failure;
+    EXPECT_TRUE(quad_detail::quantize(patches, options, &failure, &relaxed_bounds)) << failure;
     for (const auto& patch : patches.patches)
       for (int pair = 0; pair < 2; ++pair) {
         int sum[2] = {0, 0};

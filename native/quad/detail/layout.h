@@ -186,10 +186,10 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 // Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
 // integer program (quantize.cpp); false with the reason in `failure` if none exists.
 // `relaxed`: the layout needed long interior arcs at 0 edges to balance (reported).
-// `seconds`: time limit of each integer program solve (at least 1 s); each stops earlier
-// once within options.quantize_gap of the optimum.
+// Each integer program stops once within options.quantize_gap of the optimum, or at
+// options.quantize_seconds (at least 1 s) as a last resort.
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
-              bool* relaxed, double seconds = 10);
+              bool* relaxed);
 // Frees the calling thread's integer-programming state (GLPK keeps one per thread); for
 // threads that ran quantize and end.
 void release_quantize_thread();
