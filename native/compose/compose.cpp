@@ -10,6 +10,7 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <limits>
@@ -167,6 +168,41 @@ std::string intersecting_pairs(const TriangleMesh& mesh, const SolidSet& solids)
   return text;
 }
 
+// The corefinement's vertex and face order depends on where its points were allocated, so
+// the same input gave the same solid in a different order from run to run (and a
+// different composed.obj). Vertices are put in lexicographic order (ties keep their
+// order), each triangle starts at its smallest vertex (orientation kept) and triangles are
+// sorted: the same solid is then the same arrays.
+TriangleMesh canonical_order(const TriangleMesh& mesh) {
+  const Eigen::Index nv = mesh.vertices.rows(), nt = mesh.triangles.rows();
+  std::vector<int> order(static_cast<size_t>(nv));
+  for (Eigen::Index v = 0; v < nv; ++v) order[static_cast<size_t>(v)] = static_cast<int>(v);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    for (int k = 0; k < 3; ++k)
+      if (mesh.vertices(a, k) != mesh.vertices(b, k)) return mesh.vertices(a, k) < mesh.vertices(b, k);
+    return false;
+  });
+  TriangleMesh out;
+  out.vertices.resize(nv, 3);
+  std::vector<int> renamed(static_cast<size_t>(nv));
+  for (size_t i = 0; i < order.size(); ++i) {
+    out.vertices.row(static_cast<Eigen::Index>(i)) = mesh.vertices.row(order[i]);
+    renamed[static_cast<size_t>(order[i])] = static_cast<int>(i);
+  }
+  std::vector<std::array<int, 3>> triangles(static_cast<size_t>(nt));
+  for (Eigen::Index t = 0; t < nt; ++t) {
+    std::array<int, 3> c{renamed[mesh.triangles(t, 0)], renamed[mesh.triangles(t, 1)],
+                         renamed[mesh.triangles(t, 2)]};
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    triangles[static_cast<size_t>(t)] = c;
+  }
+  std::sort(triangles.begin(), triangles.end());
+  out.triangles.resize(nt, 3);
+  for (Eigen::Index t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) out.triangles(t, k) = triangles[static_cast<size_t>(t)][k];
+  return out;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -288,7 +324,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   // Edges below 1e-10 × the scene come from operands that nearly coincide; collapsed
   // before rounding (round.cpp), 10× below the 1e-9 to which faces are matched to solids.
   detail::Rounded rounded = detail::round_to_doubles(std::move(g.mesh), 1e-10 * scale);
-  out.mesh = std::move(rounded.mesh);
+  out.mesh = canonical_order(rounded.mesh);
   if (rounded.collapsed > 0 || rounded.blocked > 0) report.diagnostics.push_back(near_coincidence(rounded, solids, scale));
   out.mesh.triangle_source = face_sources(out.mesh, solids, cells, scale);
   for (int s : out.mesh.triangle_source) (s >= 0 ? report.solid_faces : report.organic_faces) += 1;
