@@ -553,6 +553,13 @@ FitOptions little_fairness() {
   return options;
 }
 
+// The fit with little fairness and without the fold check: what folds the tubes below.
+Fitted unchecked_fit(const Fixture& f) {
+  FitOptions options = little_fairness();
+  options.fold_check_samples = 0;
+  return fit_cage(f.cage, f.region, f.curves, options, Context());
+}
+
 // A fit must not fold the surface: the tube's region with its +x half moved 1.5 towards
 // −x, through the other half, pulls the cage's +x side through its −x side. The plain
 // fit's limit surface then intersects itself; with the check and no smoothing the initial
@@ -568,9 +575,7 @@ Fixture folding_tube() {
 TEST(Fit, AFitThatFoldsTheSurfaceIsUndone) {
   const Fixture f = folding_tube();
   ASSERT_FALSE(limit_folds(f.cage));
-  FitOptions options = little_fairness();
-  options.fold_check_samples = 0;
-  const Fitted plain = fit_cage(f.cage, f.region, f.curves, options, Context());
+  const Fitted plain = unchecked_fit(f);
   EXPECT_FALSE(plain.report.kept_initial);
   EXPECT_TRUE(limit_folds(plain.cage));
   FitOptions undo = little_fairness();
@@ -608,9 +613,7 @@ TEST(Fit, FoldSmoothingGoesOnWhileTheFoldsShrink) {
   for (Eigen::Index i = 0; i < f.region.vertices.rows(); ++i)
     if (f.region.vertices(i, 0) > 0) f.region.vertices(i, 0) -= 0.5 + 0.5 * (f.region.vertices(i, 2) + 0.8) / 1.6;
   f.curves.clear();
-  FitOptions plain_options = little_fairness();
-  plain_options.fold_check_samples = 0;
-  ASSERT_TRUE(limit_folds(fit_cage(f.cage, f.region, f.curves, plain_options, Context()).cage));
+  ASSERT_TRUE(limit_folds(unchecked_fit(f).cage));
   FitOptions options = little_fairness();
   options.fold_smoothing_rounds = 1;
   const Fitted fitted = fit_cage(f.cage, f.region, f.curves, options, Context());
@@ -626,9 +629,7 @@ TEST(Fit, FoldSmoothingGoesOnWhileTheFoldsShrink) {
 // both fold rather than saying nothing.
 TEST(Fit, AFoldTheInitialCageAlreadyHasIsReported) {
   const Fixture f = folding_tube();
-  FitOptions plain_options = little_fairness();
-  plain_options.fold_check_samples = 0;
-  const Fitted plain = fit_cage(f.cage, f.region, f.curves, plain_options, Context());
+  const Fitted plain = unchecked_fit(f);
   ASSERT_TRUE(limit_folds(plain.cage));
   const Fitted again = fit_cage(plain.cage, f.region, f.curves, little_fairness(), Context());
   EXPECT_FALSE(again.report.kept_initial);
