@@ -13,6 +13,10 @@
 // between them is a triangle with an empty side, which quantization collapses onto one
 // curve. At a singular vertex the angles are the curves' own, scaled to the singularity's
 // quarter turns.
+// Rounds after the first fill and read again only the patches around vertices where the
+// layout changed (cuts traced, stretches removed, nodes added): on the 5 × 5 net the
+// first round fills 591k refined triangles, later ones 0.1–330k, and build_patches takes
+// 0.9–1.0 s per layout choice instead of 1.4–1.7 s, with the same patches.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -36,7 +40,8 @@ struct Corner {
   int halfedge_out;  // patch boundary halfedge leaving the node
   int halfedge_in;   // patch boundary halfedge entering it
   double angle;
-  int quarters;
+  int quarters;   // as used: the reading, or its override
+  int read = 2;   // the reading
 };
 
 struct Cycle {
@@ -303,6 +308,23 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
   // taken off as the shortest arc of a patch it pinched the next), and a state seen
   // before only leads through the same rounds again.
   std::map<std::size_t, int> seen_states;
+  // Per patch, by its lowest face: its faces, and its cycles and Euler characteristic as
+  // read from the layout (corner readings before overrides); kept across rounds.
+  struct Examined {
+    std::vector<int> faces;
+    long chi = 0;
+    std::vector<Cycle> cycles;
+  };
+  std::map<int, Examined> examined;
+  const int nf = static_cast<int>(s.mesh.n_faces());
+  std::vector<int> patch_of(nf, -1);  // face → its patch's key
+  // The layout as the last round read it.
+  std::vector<int> last_edge_curve;
+  std::vector<Vec3> last_dir;
+  std::vector<char> last_node;
+  std::vector<int> vertex_stamp(s.mesh.n_vertices(), -1);
+  std::vector<int> halfedge_stamp(s.mesh.n_halfedges(), -1), boundary_at(s.mesh.n_halfedges(), 0);
+  int visit = 0;  // stamp of an examination
   for (int round = 0;; ++round) {
     ++layout.patch_rounds;
     const auto [first_seen, fresh] =
@@ -312,20 +334,53 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                       " give back the layout of round " + std::to_string(first_seen->second) +
                       "; some patches never become four-sided disks");
     build_arcs(s, layout, out);
-    // Flood fill the component's faces across edges no curve runs along.
-    const int nf = static_cast<int>(s.mesh.n_faces());
-    std::vector<int> patch_of(nf, -1);
-    std::vector<std::vector<int>> patch_faces;
-    for (int f0 = 0; f0 < nf; ++f0) {
-      if (!s.in(f0) || patch_of[f0] >= 0) continue;
-      const int p = static_cast<int>(patch_faces.size());
-      patch_faces.push_back({f0});
-      patch_of[f0] = p;
-      for (size_t k = 0; k < patch_faces[p].size(); ++k)
-        for (auto h : s.mesh.fh_range(s.mesh.face_handle(patch_faces[p][k]))) {
+    // Flood fill the component's faces across edges no curve runs along. Only where the
+    // layout changed since the last round (a curve edge, its direction or a node): the
+    // patches around those vertices are filled and examined again, the others keep what
+    // the last round found. A patch is known by its lowest face (its key), and patches
+    // are taken in key order, as a full fill from face 0 up would number them.
+    std::vector<int> pool;  // faces to fill again
+    if (round == 0) {
+      for (int f = 0; f < nf; ++f)
+        if (s.in(f)) pool.push_back(f);
+    } else {
+      std::vector<int> changed;
+      for (int e = 0; e < static_cast<int>(layout.edge_curve.size()); ++e) {
+        bool differs = layout.edge_curve[e] != last_edge_curve[e];
+        for (int h : {2 * e, 2 * e + 1})
+          differs |= (layout.edge_curve[e] >= 0 || last_edge_curve[e] >= 0) &&
+                     layout.halfedge_dir[h] != last_dir[h];
+        if (differs) changed.push_back(s.from(2 * e)), changed.push_back(s.to(2 * e));
+      }
+      for (int v : s.vertices)
+        if (layout.node[v] != last_node[v]) changed.push_back(v);
+      std::set<int> stale;  // keys of the patches to fill again
+      for (int v : changed)
+        for (auto f : s.mesh.vf_range(s.mesh.vertex_handle(v)))
+          if (s.in(f.idx())) stale.insert(patch_of[f.idx()]);
+      for (int key : stale) {
+        const auto it = examined.find(key);
+        pool.insert(pool.end(), it->second.faces.begin(), it->second.faces.end());
+        examined.erase(it);
+      }
+      std::sort(pool.begin(), pool.end());
+      for (int f : pool) patch_of[f] = -1;
+    }
+    last_edge_curve = layout.edge_curve;
+    last_dir = layout.halfedge_dir;
+    last_node = layout.node;
+    std::vector<int> fresh_keys;
+    for (int f0 : pool) {
+      if (patch_of[f0] >= 0) continue;
+      Examined& patch = examined[f0];
+      fresh_keys.push_back(f0);
+      patch.faces.push_back(f0);
+      patch_of[f0] = f0;
+      for (size_t k = 0; k < patch.faces.size(); ++k)
+        for (auto h : s.mesh.fh_range(s.mesh.face_handle(patch.faces[k]))) {
           if (layout.edge_curve[h.idx() >> 1] >= 0) continue;
           const int g = s.face(h.idx() ^ 1);
-          if (g >= 0 && s.in(g) && patch_of[g] < 0) patch_of[g] = p, patch_faces[p].push_back(g);
+          if (g >= 0 && s.in(g) && patch_of[g] < 0) patch_of[g] = f0, patch.faces.push_back(g);
         }
     }
     out.patches.clear();
@@ -393,17 +448,15 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       for (size_t k = 0; k < ranked.size() && k < 24; ++k) fix.cuts.push_back(ranked[k].second);
       return fix;
     };
-    std::vector<int> vertex_stamp(s.mesh.n_vertices(), -1);
-    std::vector<int> halfedge_stamp(s.mesh.n_halfedges(), -1), boundary_at(s.mesh.n_halfedges(), 0);
-    int visit = 0;  // stamp of this examination (a patch can be examined again: --p below)
-    for (int p = 0; p < static_cast<int>(patch_faces.size()); ++p) {
+    // The new patches' boundary cycles, Euler characteristic and corner readings.
+    for (int key : fresh_keys) {
+      Examined& patch = examined[key];
       ++visit;
-      // Boundary cycles and the Euler characteristic of the patch.
       // V − E + F with E = (3F + halfedges whose other side is not in the patch) / 2;
       // vertices and boundary halfedges are marked with this examination's stamp.
       std::vector<int> boundary;
       long vertex_count = 0, open_halfedges = 0;
-      for (int f : patch_faces[p])
+      for (int f : patch.faces)
         for (auto h : s.mesh.fh_range(s.mesh.face_handle(f))) {
           const int v = s.from(h.idx());
           if (vertex_stamp[v] != visit) {
@@ -411,16 +464,15 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
             ++vertex_count;
           }
           const int g = s.face(h.idx() ^ 1);
-          if (g < 0 || patch_of[g] != p) ++open_halfedges;
+          if (g < 0 || patch_of[g] != key) ++open_halfedges;
           if (layout.edge_curve[h.idx() >> 1] >= 0) boundary.push_back(h.idx());
         }
       std::sort(boundary.begin(), boundary.end());  // cycles start at their lowest halfedge
       for (size_t b = 0; b < boundary.size(); ++b)
         halfedge_stamp[boundary[b]] = visit, boundary_at[boundary[b]] = static_cast<int>(b);
-      const long face_count = static_cast<long>(patch_faces[p].size());
-      const long chi = vertex_count - (3 * face_count + open_halfedges) / 2 + face_count;
+      const long face_count = static_cast<long>(patch.faces.size());
+      patch.chi = vertex_count - (3 * face_count + open_halfedges) / 2 + face_count;
       std::vector<char> used(boundary.size(), 0);
-      std::vector<Cycle> cycles;
       for (size_t b = 0; b < boundary.size(); ++b) {
         if (used[b]) continue;
         Cycle cycle;
@@ -459,13 +511,23 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
               (a.quarters == 1 || a.quarters == 3))
             a.quarters = b.quarters = 2;
         }
-        for (Corner& k : cycle.nodes) {
-          auto o = quarter_override.find(k.halfedge_out);
-          if (o != quarter_override.end()) k.quarters = o->second;
-        }
-        cycles.push_back(cycle);
+        for (Corner& k : cycle.nodes) k.read = k.quarters;
+        patch.cycles.push_back(cycle);
       }
-      // Validity and, if invalid, the fix this round.
+    }
+    // Every patch, in key order: validity and, if invalid, the fix this round (a patch is
+    // looked at again after its corners are re-read: --p below).
+    std::vector<Examined*> patches_in_order;
+    for (auto& [key, patch] : examined) patches_in_order.push_back(&patch);
+    for (int p = 0; p < static_cast<int>(patches_in_order.size()); ++p) {
+      const std::vector<int>& faces = patches_in_order[p]->faces;
+      const long chi = patches_in_order[p]->chi;
+      std::vector<Cycle>& cycles = patches_in_order[p]->cycles;
+      for (Cycle& c : cycles)
+        for (Corner& k : c.nodes) {
+          auto o = quarter_override.find(k.halfedge_out);
+          k.quarters = o != quarter_override.end() ? o->second : k.read;
+        }
       bool repeated = false;
       if (cycles.size() == 1) {
         std::vector<int> cv;
@@ -491,7 +553,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       }
       if (cycles.size() != 1 || chi != 1 || repeated) {
         if (cycles.empty()) {  // no boundary at all (a closed component without curves)
-          const int h = s.mesh.halfedge_handle(s.mesh.face_handle(patch_faces[p][0])).idx();
+          const int h = s.mesh.halfedge_handle(s.mesh.face_handle(faces[0])).idx();
           Fix fix;
           fix.cuts.push_back({s.from(h), h, h, 0.5});
           fixes.push_back(fix);
@@ -558,7 +620,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       }
       // Valid: split the cycle into four sides at its corners.
       Patch patch;
-      patch.faces = patch_faces[p];
+      patch.faces = faces;
       for (int f : patch.faces) patch.quads += s.face_quads(f);
       std::vector<int> corner_at;
       const int n = static_cast<int>(cycle.halfedges.size());
