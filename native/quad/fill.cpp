@@ -84,6 +84,12 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
   };
   int collapsed = 0;
   int unlocated = 0;
+  // Per mesh vertex, stamped with the patch that set them: its map parameter, and its row
+  // among the patch's unknowns.
+  const size_t nv = s.mesh.n_vertices();
+  std::vector<Eigen::Vector2d> uv(nv);
+  std::vector<int> uv_stamp(nv, 0), row_stamp(nv, 0), row_of(nv, -1);
+  int stamp = 0;
   for (const Patch& patch : pl.patches) {
     int extent[4] = {0, 0, 0, 0};
     for (int side = 0; side < 4; ++side)
@@ -93,7 +99,9 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
     const Eigen::Vector2d origin[4] = {{0, 0}, {double(A), 0}, {double(A), double(B)}, {0, double(B)}};
     const Eigen::Vector2d step[4] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
     std::vector<std::vector<int>> grid(A + 1, std::vector<int>(B + 1, -1));
-    std::map<int, Eigen::Vector2d> fixed;
+    ++stamp;
+    auto set_uv = [&](int v, const Eigen::Vector2d& at) { uv[v] = at, uv_stamp[v] = stamp; };
+    auto has_uv = [&](int v) { return uv_stamp[v] == stamp; };
     for (int side = 0; side < 4; ++side) {
       double offset = 0;
       for (auto& [a, reversed] : patch.sides[side]) {
@@ -104,7 +112,7 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
         for (size_t i = 0; i < vs.size(); ++i) {
           if (i) walked += (s.point[vs[i]] - s.point[vs[i - 1]]).norm();
           const double at = offset + arc.count * (arc.length > 0 ? walked / arc.length : 0.0);
-          fixed[vs[i]] = origin[side] + at * step[side];
+          set_uv(vs[i], origin[side] + at * step[side]);
         }
         for (int k = 0; k <= arc.count; ++k) {
           const Eigen::Vector2d g = origin[side] + (offset + k) * step[side];
@@ -126,20 +134,23 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
       ++collapsed;
       continue;
     }
-    // Tutte map of the interior vertices (mean-value weights).
-    std::map<int, int> unknown;
+    // Tutte map of the interior vertices (mean-value weights), numbered as the patch's
+    // faces reach them; the rows are written in vertex order.
+    std::vector<int> unknown;
     for (int f : patch.faces)
       for (auto v : s.mesh.fv_range(s.mesh.face_handle(f)))
-        if (!fixed.count(v.idx()) && !unknown.count(v.idx())) {
-          const int id = static_cast<int>(unknown.size());
-          unknown[v.idx()] = id;
+        if (!has_uv(v.idx()) && row_stamp[v.idx()] != stamp) {
+          row_stamp[v.idx()] = stamp, row_of[v.idx()] = static_cast<int>(unknown.size());
+          unknown.push_back(v.idx());
         }
-    std::map<int, Eigen::Vector2d> uv = fixed;
     if (!unknown.empty()) {
       const int n = static_cast<int>(unknown.size());
+      std::vector<int> in_order = unknown;
+      std::sort(in_order.begin(), in_order.end());
       std::vector<Eigen::Triplet<double>> triplets;
       Eigen::MatrixX2d rhs = Eigen::MatrixX2d::Zero(n, 2);
-      for (auto& [v, row] : unknown) {
+      for (int v : in_order) {
+        const int row = row_of[v];
         double diagonal = 0;
         for (auto h : s.mesh.voh_range(s.mesh.vertex_handle(v))) {
           const int w = s.to(h.idx());
@@ -151,9 +162,14 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
           const double weight =
               (std::tan(0.5 * alpha) + std::tan(0.5 * beta)) / std::max(e.norm(), 1e-300);
           diagonal += weight;
-          auto col = unknown.find(w);
-          if (col != unknown.end()) triplets.emplace_back(row, col->second, -weight);
-          else rhs.row(row) += weight * uv.at(w).transpose();
+          if (row_stamp[w] == stamp) {
+            triplets.emplace_back(row, row_of[w], -weight);
+          } else {
+            GENBREP_CHECK(has_uv(w), Code::StageFailure,
+                          "quad: component " + std::to_string(s.component) +
+                              ": a patch's interior reaches past its boundary");
+            rhs.row(row) += weight * uv[w].transpose();
+          }
         }
         triplets.emplace_back(row, row, diagonal);
       }
@@ -165,7 +181,7 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
                     "quad: component " + std::to_string(s.component) +
                         ": the Tutte map of a patch is singular");
       const Eigen::MatrixX2d solution = solver.solve(rhs);
-      for (auto& [v, row] : unknown) uv[v] = solution.row(row).transpose();
+      for (int row = 0; row < n; ++row) set_uv(unknown[row], solution.row(row).transpose());
     }
     // Lift the interior grid points: each triangle claims the integer points it contains.
     std::vector<std::vector<double>> quality(A + 1, std::vector<double>(B + 1, -1e300));
@@ -173,7 +189,7 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
     for (int f : patch.faces) {
       int c[3], k = 0;
       for (auto v : s.mesh.fv_range(s.mesh.face_handle(f))) c[k++] = v.idx();
-      const Eigen::Vector2d p0 = uv.at(c[0]), p1 = uv.at(c[1]), p2 = uv.at(c[2]);
+      const Eigen::Vector2d p0 = uv[c[0]], p1 = uv[c[1]], p2 = uv[c[2]];
       const double area = (p1 - p0).x() * (p2 - p0).y() - (p1 - p0).y() * (p2 - p0).x();
       if (std::abs(area) < 1e-300) continue;
       const Eigen::Vector2d lo = p0.cwiseMin(p1).cwiseMin(p2), hi = p0.cwiseMax(p1).cwiseMax(p2);
