@@ -1285,6 +1285,24 @@ TEST(Quad, ExtraCutsThatGiveBackAnEarlierLayoutStopThere) {
   EXPECT_TRUE(found) << "the requested layout did not stop on a repeated layout";
 }
 
+// The 3 × 3 net's requested layout: traced and built into patches with default options.
+struct NetThreeLayout {
+  NetThreeLayout()
+      : r(relaxed(partition_scene(net_scene(0.12, 3)))),
+        field(compute_field(r.mesh, r.partition, {}, Context())),
+        s(r.mesh, r.partition, field, 0),
+        layout(quad_detail::start_layout(s)) {
+    quad_detail::Messages messages;
+    quad_detail::trace_separatrices(s, layout, QuadOptions{}, messages);
+    built = quad_detail::build_patches(s, layout, QuadOptions{}, messages);
+  }
+  const Partitioned r;
+  const CrossField field;
+  const quad_detail::Surface s;
+  quad_detail::Layout layout;
+  quad_detail::PatchLayout built;
+};
+
 // Quantization's integer program stops at QuadOptions::quantize_gap, which depends on the
 // problem only (the genus-64 net's programs ran into the 10 s time limit instead, and their
 // counts depended on the machine). On the 3 × 3 net's requested layout (722 arcs, which
@@ -1292,13 +1310,8 @@ TEST(Quad, ExtraCutsThatGiveBackAnEarlierLayoutStopThere) {
 // every solution balances every patch, costs no more than the gap allows, takes no more
 // nodes than the optimal solve, and does not change with the time allowed.
 TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
-  const Partitioned r = relaxed(partition_scene(net_scene(0.12, 3)));
-  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
-  const quad_detail::Surface s(r.mesh, r.partition, field, 0);
-  quad_detail::Layout layout = quad_detail::start_layout(s);
-  quad_detail::Messages messages;
-  quad_detail::trace_separatrices(s, layout, QuadOptions{}, messages);
-  const quad_detail::PatchLayout built = quad_detail::build_patches(s, layout, QuadOptions{}, messages);
+  const NetThreeLayout net;
+  const quad_detail::PatchLayout& built = net.built;
   auto solve = [&](double gap, double seconds) {
     quad_detail::PatchLayout patches = built;
     QuadOptions options;
@@ -1391,13 +1404,10 @@ TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
 // from scratch gives: every component face in one patch, and each patch one connected
 // set of faces between curves.
 TEST(Quad, RoundsThatRefillOnlyChangedPatchesGiveTheFullFill) {
-  const Partitioned r = relaxed(partition_scene(net_scene(0.12, 3)));
-  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
-  const quad_detail::Surface s(r.mesh, r.partition, field, 0);
-  quad_detail::Layout layout = quad_detail::start_layout(s);
-  quad_detail::Messages messages;
-  quad_detail::trace_separatrices(s, layout, QuadOptions{}, messages);
-  const quad_detail::PatchLayout built = quad_detail::build_patches(s, layout, QuadOptions{}, messages);
+  const NetThreeLayout net;
+  const quad_detail::Surface& s = net.s;
+  const quad_detail::Layout& layout = net.layout;
+  const quad_detail::PatchLayout& built = net.built;
   std::printf("[quad] net 3x3: %d rounds, %zu patches, %d stretches removed\n", layout.patch_rounds,
               built.patches.size(), built.removed_stretches);
   ASSERT_GT(layout.patch_rounds, 2) << "this layout no longer needs extra cuts";
