@@ -649,6 +649,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     out->notes.push_back(text);
     for (auto& variant : variants) variant.options.density *= raise;
   }
+  // The quads the size field asks for at this density (QuadStats::size_field_quads).
+  double asked = 0;
+  for (auto f : coarse.mesh.faces())
+    if (coarse.in(f.idx())) asked += coarse.face_quads(f.idx());
+  asked *= variants[0].options.density * variants[0].options.density;
   const auto preparing = std::chrono::steady_clock::now();
   const int levels = refine_levels(coarse, variants[0].options);
   quad_detail::RefinedDesign refined;
@@ -830,6 +835,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                     best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads);
       out->diagnostics.push_back(text);
     }
+    best_stats.size_field_quads = asked;
     out->cages.push_back(std::move(best_cage));
     out->stats.push_back(best_stats);
     return;
@@ -871,6 +877,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   stats.irregular_off_singularities =
       quad_detail::irregular_off_singularities(checks, cage, singular, variants[0].options.density);
   out->cages.push_back(std::move(cage));
+  stats.size_field_quads = asked;
   out->stats.push_back(stats);
 }
 

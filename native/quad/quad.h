@@ -166,6 +166,10 @@ struct QuadStats {
   // singularity of the component: irregular vertices the layout put where the field has
   // none (quad_detail::irregular_off_singularities).
   int irregular_off_singularities = 0;
+  // The quads the size field asks for on the component at the density used (after any
+  // raise for dense singularities): Σ area / (size_u · size_v) · density² over its faces.
+  // quads / size_field_quads is how closely the cage's density follows the field's.
+  double size_field_quads = 0;
   double seconds = 0;
   double interior_valence4_fraction() const {
     return interior_vertices ? double(interior_valence4) / interior_vertices : 1.0;

@@ -1435,3 +1435,34 @@ TEST(Quad, RoundsThatRefillOnlyChangedPatchesGiveTheFullFill) {
     EXPECT_EQ(faces, regions[p]) << "patch " << p;
   }
 }
+
+// Density follows the size field and the user's density (issue 5): on arches (two cages,
+// grid incidence) every cage has within 0.8–1.4× the quads its size field asks for
+// (QuadStats::size_field_quads, reported as size_field_quads), and doubling the user's
+// density (FieldOptions::density: edges half as long) gives 3–5× the quads.
+TEST(Quad, CageDensityFollowsTheSizeFieldAndTheUsersDensity) {
+  const FixtureFiles f = load_fixture("arches");
+  Options options;
+  options.incidence.mode = IncidenceOptions::Mode::Grid;
+  options.incidence.grid_h = 0.125;
+  options.incidence.grid_origin = Vec3(0.37, 0.29, 0.41) * 0.125;
+  options.until = "quad";
+  double total[2] = {0, 0}, asked[2] = {0, 0};
+  for (int k : {0, 1}) {
+    options.field.density = k ? 2.0 : 1.0;
+    const QuadResult q = genbrep::convert({{"design", f.design}, f.solids}, options, Context()).quads;
+    ASSERT_EQ(q.cages.size(), 2u);
+    for (const QuadStats& s : q.stats) {
+      std::printf("[quad] arches, density %g: %d quads, the size field asks %.0f (%.2fx)\n",
+                  options.field.density, s.quads, s.size_field_quads, s.quads / s.size_field_quads);
+      EXPECT_FALSE(s.fallback);
+      EXPECT_GT(s.quads, 0.8 * s.size_field_quads);
+      EXPECT_LT(s.quads, 1.4 * s.size_field_quads);
+      total[k] += s.quads, asked[k] += s.size_field_quads;
+    }
+  }
+  std::printf("[quad] arches: density 2 gives %.2fx the quads (the size field asks %.2fx)\n",
+              total[1] / total[0], asked[1] / asked[0]);
+  EXPECT_GT(total[1], 3 * total[0]);
+  EXPECT_LT(total[1], 5 * total[0]);
+}
