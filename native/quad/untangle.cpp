@@ -428,7 +428,7 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
 
 int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad, const std::vector<int>& diagonal,
-                       std::vector<int>* done) {
+                       std::vector<int>* done, bool doublets) {
   CageEdit edit(cage);
   const auto& fixed = edit.incidence.on_chain;
   const auto& quads_of = edit.incidence.quads_of;
@@ -446,10 +446,12 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
       for (int r : quads_of[a])
         if (r != q)
           for (int j = 0; j < 4; ++j) shared |= cage.quads(r, j) == c;
-      // The other two corners lose a quad: no interior vertex may drop below 3 quads.
+      // The other two corners lose a quad: no interior vertex may drop below 3 quads
+      // (below 2 with `doublets`).
       const int b = cage.quads(q, k + 1), d = cage.quads(q, (k + 3) % 4);
       if (touched[b] || touched[d]) continue;
-      if (quads_of[b].size() < (fixed[b] ? 3u : 4u) || quads_of[d].size() < (fixed[d] ? 3u : 4u))
+      const size_t least = doublets ? 3u : 4u;
+      if (quads_of[b].size() < (fixed[b] ? 3u : least) || quads_of[d].size() < (fixed[d] ? 3u : least))
         continue;
       if (shared) continue;
       // Into a chain vertex only if the interior end touches no other chain vertex (the
@@ -651,7 +653,10 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
   // needed more than 8.
   *collapsed = 0;
   for (int attempt = 0; attempt < 32 && !bad.empty(); ++attempt) {
-    const int now = collapse_diagonals(locator, cage, bad);
+    int now = collapse_diagonals(locator, cage, bad);
+    // Its other corners have 3 quads each: collapse anyway and join the doublets left.
+    if (!now && (now = collapse_diagonals(locator, cage, bad, {}, nullptr, true)))
+      remove_doublets(cage);
     if (!now) break;
     *collapsed += now;
     moved += static_cast<int>(

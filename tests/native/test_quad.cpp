@@ -386,6 +386,76 @@ TEST(Quad, UntangleOpensAFoldAndADiagonalCollapseKeepsTheCageValid) {
   EXPECT_LT(nearest, 1e-9);
 }
 
+// A fold whose four corners have 3 quads each cannot lose a diagonal without leaving an
+// interior vertex of 2 quads; untangling's last resort collapses it anyway and joins the
+// two doublets it leaves, so the cage stays a valid pure-quad manifold. On the tube's
+// cage, a deep quad's corners are brought to 3 quads each by first collapsing the four
+// quads that touch it at one corner only (each along the diagonal away from that corner).
+TEST(Quad, AFoldWhoseCornersHaveThreeQuadsIsCollapsedAndItsDoubletsJoined) {
+  const Partitioned r = relaxed(partition_scene(tube_scene(0.05)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  const QuadResult result = extract_cages(r.mesh, r.partition, field, {}, Context());
+  ASSERT_EQ(result.cages.size(), 1u);
+  QuadCage cage = result.cages[0];
+  const quad_detail::Surface surface(r.mesh, r.partition, field, 0);
+  const quad_detail::CageChecks checks(surface);
+  const quad_detail::CageIncidence incidence(cage);
+  // A quad whose corners and their neighbours are interior, each corner with 4 quads.
+  auto deep = [&](int v) {
+    if (incidence.on_chain[v] || incidence.quads_of[v].size() != 4) return false;
+    for (int w : incidence.neighbours[v])
+      if (incidence.on_chain[w]) return false;
+    return true;
+  };
+  int pick = -1;
+  for (int q = 0; q < cage.quads.rows() && pick < 0; ++q) {
+    bool all = true;
+    for (int k = 0; k < 4; ++k) all &= deep(cage.quads(q, k));
+    if (all) pick = q;
+  }
+  ASSERT_GE(pick, 0);
+  // The quads sharing exactly one corner with it, and their diagonal away from that corner.
+  std::vector<int> corner_quads, diagonals;
+  for (int k = 0; k < 4; ++k) {
+    const int v = cage.quads(pick, k);
+    for (int q : incidence.quads_of[v]) {
+      int shared = 0, at = -1;
+      for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i)
+          if (cage.quads(q, j) == cage.quads(pick, i)) ++shared, at = j;
+      if (shared == 1) corner_quads.push_back(q), diagonals.push_back((at + 1) % 2);
+    }
+  }
+  ASSERT_EQ(corner_quads.size(), 4u);
+  Vec3 centre = Vec3::Zero();
+  for (int k = 0; k < 4; ++k) centre += 0.25 * cage.vertices.row(cage.quads(pick, k)).transpose();
+  ASSERT_EQ(quad_detail::collapse_diagonals(checks.locator, cage, corner_quads, diagonals), 4);
+  ASSERT_EQ(check_cage(cage, r), 0);
+  // The picked quad again (vertices were renumbered): the one around its old centre.
+  int q = -1;
+  double nearest = 1e300;
+  for (int j = 0; j < cage.quads.rows(); ++j) {
+    Vec3 c = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) c += 0.25 * cage.vertices.row(cage.quads(j, k)).transpose();
+    if ((c - centre).norm() < nearest) nearest = (c - centre).norm(), q = j;
+  }
+  const quad_detail::CageIncidence now(cage);
+  for (int k = 0; k < 4; ++k) ASSERT_EQ(now.quads_of[cage.quads(q, k)].size(), 3u);
+  const QuadCage before = cage;
+  EXPECT_EQ(quad_detail::collapse_diagonals(checks.locator, cage, {q}), 0);
+  ASSERT_EQ(quad_detail::collapse_diagonals(checks.locator, cage, {q}, {}, nullptr, true), 1);
+  // The two corners left with 2 quads are joined; the merged vertex (3 + 3 - 2 = 4 quads)
+  // loses one quad to each join and is a doublet itself, joined too.
+  EXPECT_EQ(quad_detail::remove_doublets(cage), 3);
+  EXPECT_EQ(cage.quads.rows(), before.quads.rows() - 4);
+  EXPECT_EQ(cage.vertices.rows(), before.vertices.rows() - 4);
+  EXPECT_EQ(check_cage(cage, r), 0);
+  const QuadStats stats = measure_cage(cage, r.mesh);
+  EXPECT_EQ(stats.flipped_quads, 0);
+  EXPECT_EQ(stats.degenerate_quads, 0);
+  EXPECT_EQ(stats.quads, cage.quads.rows());
+}
+
 // A doublet (an interior vertex with two quads sharing two edges), made by splitting one
 // quad of the tube's cage through a new centre vertex, is removed again.
 TEST(Quad, DoubletIsRemoved) {

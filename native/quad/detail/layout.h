@@ -300,9 +300,12 @@ QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
 // `diagonal` (optional, one per quad of `bad`): collapse that diagonal (0: corners 0–2,
 // 1: corners 1–3) instead of the shorter one.
 // `done` (optional) receives the quads of `bad` that were collapsed (indices before).
+// `doublets`: an interior other corner may also be left with 2 quads (a doublet, which
+// remove_doublets then dissolves by joining its two quads); untangling's last resort when
+// a fold's other corners have 3 quads each.
 int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
                        const std::vector<int>& bad, const std::vector<int>& diagonal = {},
-                       std::vector<int>* done = nullptr);
+                       std::vector<int>* done = nullptr, bool doublets = false);
 // Cancels irregular vertices in pairs by diagonal collapses (the simplification step of
 // Tarini et al. 2010, "Practical quad mesh simplification"): a quad with four interior
 // corners is collapsed along a diagonal when that leaves fewer irregular vertices among
