@@ -86,7 +86,12 @@ void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
       int f = s.face(h.idx());
       if (!s.in(f)) f = s.face(h.idx() ^ 1);
       arc.length += e.norm();
-      arc.target += e.norm() / s.size_along(f, e);
+      // The target counts the arc's progress along its curve's direction, not the length
+      // of its mesh-edge path: a path that zigzags about the field line is some 10% longer
+      // than the line, and cages came out a fifth denser than the size field asked.
+      const Vec3& d = layout.halfedge_dir[h.idx()];
+      const double along = d.squaredNorm() > 0 ? std::abs(e.dot(d.normalized())) : e.norm();
+      arc.target += along / s.size_along(f, e);
       arc.vertices.push_back(b);
       if (layout.node[b] || i + 1 == vs.size()) {
         if (curve.closed) out.loop_arcs[c].push_back(id);

@@ -1004,7 +1004,8 @@ TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
 // x = 2.8 (an 18° cusp), at 1.5 × the density (the triangle is nearly one cage edge
 // across): read as a cusp, the triangle collapses onto H without any cut and every interior
 // cage vertex has valence 4. Read as a quarter turn (cusp_corners off), the triangle has
-// three corners and needs cuts and re-read corners: two irregular vertices.
+// three corners and needs extra cuts (three here; while arc targets were measured along
+// the mesh-edge paths rather than the field, the cut layout kept two irregular vertices).
 TEST(Quad, ACuspPatchCollapsesOntoOneCurve) {
   const int n = 41;
   const FlatGrid flat(n, 0.1);
@@ -1048,8 +1049,10 @@ TEST(Quad, ACuspPatchCollapsesOntoOneCurve) {
   QuadOptions off = on;
   off.cusp_corners = false;
   const Result quarter = run(off);
+  std::printf("[quad] cusp read as a quarter turn: %zu curves (%zu cuts), %d irregular vertices\n",
+              quarter.curves, quarter.curves - cusp.curves, quarter.irregular);
   EXPECT_EQ(quarter.cusps, 0);
-  EXPECT_GT(quarter.irregular, 0);
+  EXPECT_GT(quarter.curves, cusp.curves);
 }
 
 TEST(Quad, TwoArchesGiveTwoValidCages) {
@@ -1375,8 +1378,9 @@ struct NetThreeLayout {
 
 // Quantization's integer program stops at QuadOptions::quantize_gap, which depends on the
 // problem only (the genus-64 net's programs ran into the 10 s time limit instead, and their
-// counts depended on the machine). On the 3 × 3 net's requested layout (722 arcs, which
-// need branching): solved to optimality, within the default 0.5% and within 50%,
+// counts depended on the machine). On the 3 × 3 net's requested layout (726 arcs) at
+// 1.2 × the density, where its integer program needs branching (86 nodes to prove the
+// optimum; at 1.0, 8): solved to optimality, within the default 0.5% and within 50%,
 // every solution balances every patch, costs no more than the gap allows, takes no more
 // nodes than the optimal solve, and does not change with the time allowed.
 TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
@@ -1385,6 +1389,7 @@ TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
   auto solve = [&](double gap, double seconds) {
     quad_detail::PatchLayout patches = built;
     QuadOptions options;
+    options.density = 1.2;
     options.quantize_gap = gap;
     options.quantize_seconds = seconds;
     std::string failure;
@@ -1507,8 +1512,9 @@ TEST(Quad, RoundsThatRefillOnlyChangedPatchesGiveTheFullFill) {
 }
 
 // Density follows the size field and the user's density (issue 5): on arches (two cages,
-// grid incidence) every cage has within 0.8–1.4× the quads its size field asks for
-// (QuadStats::size_field_quads, reported as size_field_quads), and doubling the user's
+// grid incidence) every cage has within 0.8–1.2× the quads its size field asks for
+// (QuadStats::size_field_quads, reported as size_field_quads; 0.92–1.05× now, 1.16–1.30×
+// while arc targets counted the zigzag of mesh-edge paths), and doubling the user's
 // density (FieldOptions::density: edges half as long) gives 3–5× the quads.
 TEST(Quad, CageDensityFollowsTheSizeFieldAndTheUsersDensity) {
   const FixtureFiles f = load_fixture("arches");
@@ -1527,7 +1533,7 @@ TEST(Quad, CageDensityFollowsTheSizeFieldAndTheUsersDensity) {
                   options.field.density, s.quads, s.size_field_quads, s.quads / s.size_field_quads);
       EXPECT_FALSE(s.fallback);
       EXPECT_GT(s.quads, 0.8 * s.size_field_quads);
-      EXPECT_LT(s.quads, 1.4 * s.size_field_quads);
+      EXPECT_LT(s.quads, 1.2 * s.size_field_quads);
       total[k] += s.quads, asked[k] += s.size_field_quads;
     }
   }
