@@ -553,11 +553,11 @@ bool meets_targets(const QuadStats& s) {
          s.mean_angle_deviation_deg <= 12.0;
 }
 
-// Meets them with a margin (valence 4 ≥ 98%, valence 3 ≥ 95%, ≤ 8°): no other layout
-// choice is tried.
+// Meets them with a margin (valence 4 ≥ 98%, valence 3 ≥ 95%, ≤ 8°) and has no irregular
+// vertex away from the field's singularities: no other layout choice is tried.
 bool comfortably_meets_targets(const QuadStats& s) {
   return s.interior_valence4_fraction() >= 0.98 && s.boundary_valence3_fraction() >= 0.95 &&
-         s.mean_angle_deviation_deg <= 8.0;
+         s.mean_angle_deviation_deg <= 8.0 && s.irregular_off_singularities == 0;
 }
 
 }  // namespace
@@ -604,6 +604,9 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
        [](QuadOptions& o) { o.pair_cancel_distance *= 2; }},
       {"separatrices joined to nearly parallel curves",
        [](QuadOptions& o) { o.join_parallel = !o.join_parallel; }},
+      {"singularity pairs within 2x the cancel distance cancelled, separatrices joined to "
+       "nearly parallel curves",
+       [](QuadOptions& o) { o.pair_cancel_distance *= 2, o.join_parallel = !o.join_parallel; }},
       {"separatrices crossing", [](QuadOptions& o) { o.cross_separatrices = !o.cross_separatrices; }},
       {"singularities within 2x the absorb distance left to the boundary",
        [](QuadOptions& o) { o.boundary_absorb_distance *= 2; }},

@@ -269,6 +269,13 @@ TEST_P(ComposeFixturePipelines, ComposedSolidIsWatertightAndRespectsTheSolids) {
     EXPECT_LE(s.mean_angle_deviation_deg, 12.0) << r.name << " cage " << c;
     EXPECT_EQ(s.flipped_quads, 0) << r.name << " cage " << c;
     EXPECT_EQ(s.degenerate_quads, 0) << r.name << " cage " << c;
+    // Irregular vertices only at the field's singularities (within one target edge), but
+    // on lattice, whose 96 singularities leave 5 farther (boss had 2 until the layout
+    // choice that both cancels close pairs and joins parallel curves was tried).
+    std::printf("[compose] %-20s cage %zu: %d irregular vertices, %d away from singularities\n",
+                r.name.c_str(), c, s.irregular_vertices, s.irregular_off_singularities);
+    EXPECT_LE(s.irregular_off_singularities, std::string(grid.name) == "lattice" ? 5 : 0)
+        << r.name << " cage " << c;
   }
   // Every component composes from its fitted cage: none falls back to its design region,
   // and no fit was undone (lattice's first fit folds; the fold is smoothed away).

@@ -171,16 +171,14 @@ TEST(Cli, ConvertsTwoArchesAndWritesReportAndPartition) {
 }
 
 // Each of the report's warnings is one "genbrep: warning:" line on standard error; notes
-// are not. Boss through quad warns (quads squeezed beyond 2.5x the target); the two
-// arches, a clean run, print no warning.
+// are not. The two arches with a keep-out far from the design warn (it touches no design
+// vertex); the two arches alone, a clean run, print no warning.
 TEST(Cli, WarningsGoToStandardErrorAndNotesDoNot) {
-  const fs::path boss = fs::path(__FILE__).parent_path() / "../../blend_fixtures/obj/boss";
   const fs::path dir = temp_dir("warnings");
-  const CliRun run = run_cli("convert --design " + (boss / "design_design.obj").string() +
-                                 " --keep-in " + (boss / "boss_keep_in.obj").string() +
-                                 " --keep-in " + (boss / "mount_keep_in.obj").string() +
-                                 " --keep-out " + (boss / "bolt_keep_out.obj").string() +
-                                 " --grid 0.037,0.029,0.041,0.1 --until quad --out " +
+  const Scene arches = two_arches_scene(0.06);
+  write_obj((dir / "far.obj").string(), box_mesh(Vec3(50, 50, 50), Vec3(51, 51, 51)));
+  const CliRun run = run_cli("convert " + write_scene(arches, dir) + " --keep-out " +
+                                 (dir / "far.obj").string() + " --until quad --out " +
                                  (dir / "out").string(),
                              dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -191,12 +189,13 @@ TEST(Cli, WarningsGoToStandardErrorAndNotesDoNot) {
   for (const auto& warning : report["diagnostics"])
     expected += "genbrep: warning: " + warning.get<std::string>() + "\n";
   EXPECT_EQ(run.err, expected);
+  EXPECT_NE(run.err.find("'far' touches no design vertex"), std::string::npos) << run.err;
   const fs::path clean = temp_dir("no_warnings");
-  const CliRun arches = run_cli("convert " + write_scene(two_arches_scene(0.06), clean) +
-                                    " --until quad --out " + (clean / "out").string(),
-                                clean);
-  ASSERT_EQ(arches.exit_code, 0) << arches.err;
-  EXPECT_EQ(arches.err, "");
+  const CliRun alone = run_cli("convert " + write_scene(arches, clean) + " --until quad --out " +
+                                   (clean / "out").string(),
+                               clean);
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  EXPECT_EQ(alone.err, "");
 }
 
 TEST(Cli, GridModeFromTheCommandLine) {
