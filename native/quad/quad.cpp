@@ -586,7 +586,8 @@ namespace {
 // singularities the boundary absorbs, whether separatrices cross, whether unbalanced
 // patches are merged). They are tried in turn, each from scratch (a layout equal to an
 // earlier one is not filled again), until a cage meets
-// the targets with a margin, or until the work budget after the first cage that meets them
+// the targets with a margin and has no irregular vertex away from the field's singularities
+// (comfortably_meets_targets), or until the work budget after the first cage that meets them
 // is spent (QuadOptions::work_after_meeting). Kept: among the cages meeting the targets, preferably one
 // that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit
 // surface can fold), then the fewest irregular vertices away from the field's

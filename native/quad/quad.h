@@ -102,7 +102,8 @@ struct QuadOptions {
   // After the first layout choice whose cage meets issue 5's targets, further choices are
   // tried (the best cage is kept) as long as choices × the component's triangles (after
   // refinement) stays within this, counting only choices that traced a layout not seen
-  // before; the search stops at once when a cage meets the targets with a margin. 6e5: all
+  // before; the search stops at once when a cage meets the targets with a margin and has
+  // no irregular vertex away from singularities. 6e5: all
   // choices on components of ≤ 25k triangles, 3 on lattice's 190k.
   double work_after_meeting = 6e5;
   // Quantization's integer program stops once its solution is provably within this
