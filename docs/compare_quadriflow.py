@@ -244,13 +244,16 @@ def bmesh_of(obj):
 # ---------------------------------------------------------------- region and QuadriFlow
 
 def extract_region(partition, component):
-    """New object: the partition faces labelled `component`, loose vertices dropped."""
+    """New object: the partition faces labelled `component`, loose edges and vertices
+    dropped (edges between two faces of other components would otherwise stay as wires,
+    and QuadriFlow refuses a mesh with them)."""
     labels = np.zeros(len(partition.data.polygons), dtype=np.int32)
     partition.data.attributes["genbrep_component"].data.foreach_get("value", labels)
     bm = bmesh_of(partition)
     bm.faces.ensure_lookup_table()
     bmesh.ops.delete(bm, geom=[bm.faces[i] for i in np.flatnonzero(labels != component)],
                      context="FACES_ONLY")
+    bmesh.ops.delete(bm, geom=[e for e in bm.edges if not e.link_faces], context="EDGES_FACES")
     bmesh.ops.delete(bm, geom=[v for v in bm.verts if not v.link_faces], context="VERTS")
     mesh = bpy.data.meshes.new(f"region {component}")
     bm.to_mesh(mesh)
