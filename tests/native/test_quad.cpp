@@ -1422,7 +1422,7 @@ TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
 }
 
 // Layout choices run two at a time give the cage they give one at a time: on arches
-// (the second choice beats the first) and boss (the first fails, the second is kept),
+// (the second choice beats the first) and boss (the first fails, a later one is kept),
 // the same cage, stats and diagnostics, and the kept choice is not the requested one.
 TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
   for (const auto& [name, h] : {std::pair{"arches", 0.125}, {"boss", 0.1}}) {
