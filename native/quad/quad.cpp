@@ -530,18 +530,23 @@ int refine_levels(const quad_detail::Surface& s, const QuadOptions& options) {
   return levels;
 }
 
+// The quads the size field asks for on the component at `density`: Σ area / (size_u ·
+// size_v) over its triangles, times density² (QuadStats::size_field_quads).
+double size_field_quads(const quad_detail::Surface& s, double density) {
+  double quads = 0;
+  for (auto f : s.mesh.faces())
+    if (s.in(f.idx())) quads += s.face_quads(f.idx());
+  return quads * (density * density);
+}
+
 // The factor (≥ 1) by which the density must rise for the component's cage to have
-// `vertices_per_singular_quarter` vertices per quarter turn of traced singularity index:
-// the quads the sizes give are Σ area / (size_u · size_v) over its triangles.
+// `vertices_per_singular_quarter` vertices per quarter turn of traced singularity index.
 double density_raise(const quad_detail::Surface& s, const QuadOptions& options) {
   if (options.vertices_per_singular_quarter <= 0) return 1;
   int quarters = 0;
   for (const Singularity& sing : s.field.singularities)
     if (sing.component == s.component && !sing.on_boundary) quarters += std::abs(sing.index);
-  double quads = 0;
-  for (auto f : s.mesh.faces())
-    if (s.in(f.idx())) quads += s.face_quads(f.idx());
-  quads *= options.density * options.density;
+  const double quads = size_field_quads(s, options.density);
   const double wanted = options.vertices_per_singular_quarter * quarters;
   return quads > 0 && quads < wanted ? std::sqrt(wanted / quads) : 1.0;
 }
@@ -653,11 +658,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     out->notes.push_back(text);
     for (auto& variant : variants) variant.options.density *= raise;
   }
-  // The quads the size field asks for at this density (QuadStats::size_field_quads).
-  double asked = 0;
-  for (auto f : coarse.mesh.faces())
-    if (coarse.in(f.idx())) asked += coarse.face_quads(f.idx());
-  asked *= variants[0].options.density * variants[0].options.density;
+  const double asked = size_field_quads(coarse, variants[0].options.density);
   const auto preparing = std::chrono::steady_clock::now();
   const int levels = refine_levels(coarse, variants[0].options);
   quad_detail::RefinedDesign refined;
