@@ -16,10 +16,14 @@
 // Rounds after the first fill and read again only the patches around vertices where the
 // layout changed (cuts traced, stretches removed, nodes added): on the 5 × 5 net the
 // first round fills 591k refined triangles, later ones 67 to 389k, and build_patches
-// takes 0.9–1.0 s per layout choice instead of 1.4–1.7 s, with the same patches.
+// takes 0.9–1.0 s per layout choice instead of 1.4–1.7 s, with the same patches. A
+// PatchReading carries this across calls: the balance rounds (quad.cpp: a patch merged,
+// cusps taken back) read again only what changed, and the first round of a later call
+// costs like a later round (5 × 5 net, a choice of 8 balance rounds: 0.43 → 0.2 s each).
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -298,10 +302,36 @@ std::size_t round_state(const Layout& layout, const std::map<int, int>& quarter_
   return key;
 }
 
+// Per patch: its faces, and its cycles and Euler characteristic as read from the layout
+// (corner readings before overrides).
+struct Examined {
+  std::vector<int> faces;
+  long chi = 0;
+  std::vector<Cycle> cycles;
+};
+
 }  // namespace
 
+struct PatchReading::State {
+  bool read = false;                 // false: nothing read yet
+  std::map<int, Examined> examined;  // by the patch's lowest face
+  std::vector<int> patch_of;         // per face: its patch's key, -1 none
+  // The layout as the last round read it.
+  std::vector<int> last_edge_curve;
+  std::vector<Vec3> last_dir;
+  std::vector<char> last_node;
+  std::set<int> last_no_cusp;
+  std::vector<int> last_attractors;
+  // Examination stamps (per vertex, per halfedge) and a boundary halfedge's place in its
+  // patch's sorted boundary.
+  std::vector<int> vertex_stamp, halfedge_stamp, boundary_at;
+  int visit = 0;
+};
+PatchReading::PatchReading() : state(std::make_unique<State>()) {}
+PatchReading::~PatchReading() = default;
+
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
-                          Messages& messages) {
+                          Messages& messages, PatchReading* reading) {
   const std::string who = "component " + std::to_string(s.component);
   std::map<int, int> quarter_override;  // by the sector's outgoing halfedge
   std::set<int> wedge_tried;             // wedge patches cut once, by their first face
@@ -313,23 +343,23 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
   // taken off as the shortest arc of a patch it pinched the next), and a state seen
   // before only leads through the same rounds again.
   std::map<std::size_t, int> seen_states;
-  // Per patch, by its lowest face: its faces, and its cycles and Euler characteristic as
-  // read from the layout (corner readings before overrides); kept across rounds.
-  struct Examined {
-    std::vector<int> faces;
-    long chi = 0;
-    std::vector<Cycle> cycles;
-  };
-  std::map<int, Examined> examined;
+  PatchReading local;
+  PatchReading::State& st = *(reading ? reading : &local)->state;
   const int nf = static_cast<int>(s.mesh.n_faces());
-  std::vector<int> patch_of(nf, -1);  // face → its patch's key
-  // The layout as the last round read it.
-  std::vector<int> last_edge_curve;
-  std::vector<Vec3> last_dir;
-  std::vector<char> last_node;
-  std::vector<int> vertex_stamp(s.mesh.n_vertices(), -1);
-  std::vector<int> halfedge_stamp(s.mesh.n_halfedges(), -1), boundary_at(s.mesh.n_halfedges(), 0);
-  int visit = 0;  // stamp of an examination
+  // Singular valences change readings anywhere: read everything again if they differ.
+  if (st.read && st.last_attractors != layout.attractors) st = PatchReading::State();
+  if (!st.read) {
+    st.patch_of.assign(nf, -1);
+    st.vertex_stamp.assign(s.mesh.n_vertices(), -1);
+    st.halfedge_stamp.assign(s.mesh.n_halfedges(), -1);
+    st.boundary_at.assign(s.mesh.n_halfedges(), 0);
+  }
+  std::map<int, Examined>& examined = st.examined;
+  std::vector<int>& patch_of = st.patch_of;  // face → its patch's key
+  std::vector<int>& vertex_stamp = st.vertex_stamp;
+  std::vector<int>& halfedge_stamp = st.halfedge_stamp;
+  std::vector<int>& boundary_at = st.boundary_at;
+  int& visit = st.visit;  // stamp of an examination
   for (int round = 0;; ++round) {
     ++layout.patch_rounds;
     const auto [first_seen, fresh] =
@@ -345,20 +375,32 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     // the last round found. A patch is known by its lowest face (its key), and patches
     // are taken in key order, as a full fill from face 0 up would number them.
     std::vector<int> pool;  // faces to fill again
-    if (round == 0) {
+    if (!st.read) {
       for (int f = 0; f < nf; ++f)
         if (s.in(f)) pool.push_back(f);
+      st.read = true;
     } else {
       std::vector<int> changed;
+      // Directions are compared, and updated for the next round, only on curve edges (of
+      // either round), in place: a copy of all of them is 43 MB on the 5 × 5 net.
       for (int e = 0; e < static_cast<int>(layout.edge_curve.size()); ++e) {
-        bool differs = layout.edge_curve[e] != last_edge_curve[e];
+        const bool curve = layout.edge_curve[e] >= 0 || st.last_edge_curve[e] >= 0;
+        bool differs = layout.edge_curve[e] != st.last_edge_curve[e];
         for (int h : {2 * e, 2 * e + 1})
-          differs |= (layout.edge_curve[e] >= 0 || last_edge_curve[e] >= 0) &&
-                     layout.halfedge_dir[h] != last_dir[h];
+          if (curve && layout.halfedge_dir[h] != st.last_dir[h]) {
+            differs = true;
+            st.last_dir[h] = layout.halfedge_dir[h];
+          }
         if (differs) changed.push_back(s.from(2 * e)), changed.push_back(s.to(2 * e));
       }
       for (int v : s.vertices)
-        if (layout.node[v] != last_node[v]) changed.push_back(v);
+        if (layout.node[v] != st.last_node[v]) changed.push_back(v);
+      // Cusp readings taken back (straighten_cusps) between calls.
+      std::vector<int> cusps;
+      std::set_symmetric_difference(layout.no_cusp.begin(), layout.no_cusp.end(),
+                                    st.last_no_cusp.begin(), st.last_no_cusp.end(),
+                                    std::back_inserter(cusps));
+      for (int h : cusps) changed.push_back(s.from(h));
       std::set<int> stale;  // keys of the patches to fill again
       for (int v : changed)
         for (auto f : s.mesh.vf_range(s.mesh.vertex_handle(v)))
@@ -371,9 +413,11 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       std::sort(pool.begin(), pool.end());
       for (int f : pool) patch_of[f] = -1;
     }
-    last_edge_curve = layout.edge_curve;
-    last_dir = layout.halfedge_dir;
-    last_node = layout.node;
+    if (st.last_dir.empty()) st.last_dir = layout.halfedge_dir;
+    st.last_edge_curve = layout.edge_curve;
+    st.last_node = layout.node;
+    st.last_no_cusp = layout.no_cusp;
+    st.last_attractors = layout.attractors;
     std::vector<int> fresh_keys;
     for (int f0 : pool) {
       if (patch_of[f0] >= 0) continue;

@@ -433,9 +433,11 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   bool relaxed = false;
   int merged = 0, straightened = 0;
   quad_detail::Messages layout_messages;  // of the last round only
+  // Each round changes the layout in a few places: only the patches there are read again.
+  quad_detail::PatchReading reading;
   for (int round = 0;; ++round) {
     layout_messages = {};
-    patches = quad_detail::build_patches(surface, layout, options, layout_messages);
+    patches = quad_detail::build_patches(surface, layout, options, layout_messages, &reading);
     const bool quantized = quad_detail::quantize(patches, options, &failure, &relaxed);
     branching += static_cast<double>(patches.quantize_nodes) * static_cast<double>(patches.arcs.size());
     if (quantized) break;

@@ -1511,6 +1511,49 @@ TEST(Quad, RoundsThatRefillOnlyChangedPatchesGiveTheFullFill) {
   }
 }
 
+// A reading handed from one build_patches call to the next on the same layout (the
+// balance rounds: a patch merged, cusps taken back) reads again only the patches around
+// the changes, and gives exactly the patches a call without it gives. On the 3 × 3 net's
+// requested layout: after one patch merged with its neighbour and every cusp patch's
+// cusps taken back, the same arcs (vertices, targets) and the same patches (faces, sides,
+// cusps) as a build of the same layout from scratch.
+TEST(Quad, ABuildThatReadsOnlyThePatchesAroundChangesGivesTheSamePatches) {
+  const NetThreeLayout net;
+  const quad_detail::Surface& s = net.s;
+  quad_detail::Layout layout = net.layout;
+  quad_detail::Messages messages;
+  quad_detail::PatchReading reading;
+  const quad_detail::PatchLayout first =
+      quad_detail::build_patches(s, layout, QuadOptions{}, messages, &reading);
+  int merged = -1, cusps = 0;
+  for (int p = 0; p < static_cast<int>(first.patches.size()) && merged < 0; ++p)
+    if (first.patches[p].cusps.empty() && quad_detail::merge_patch(s, layout, first, p)) merged = p;
+  ASSERT_GE(merged, 0) << "no patch could be merged";
+  for (int p = 0; p < static_cast<int>(first.patches.size()); ++p)
+    if (!first.patches[p].cusps.empty()) cusps += quad_detail::straighten_cusps(layout, first, p);
+  ASSERT_GT(cusps, 0) << "the layout has no cusp patch any more";
+  quad_detail::Layout fresh = layout;
+  const quad_detail::PatchLayout read_again =
+      quad_detail::build_patches(s, layout, QuadOptions{}, messages, &reading);
+  const quad_detail::PatchLayout scratch =
+      quad_detail::build_patches(s, fresh, QuadOptions{}, messages);
+  std::printf("[quad] net 3x3: %zu patches, patch %d merged, %d cusps taken back: %zu patches\n",
+              first.patches.size(), merged, cusps, scratch.patches.size());
+  EXPECT_NE(scratch.patches.size(), first.patches.size());
+  ASSERT_EQ(read_again.arcs.size(), scratch.arcs.size());
+  for (size_t a = 0; a < scratch.arcs.size(); ++a) {
+    EXPECT_EQ(read_again.arcs[a].vertices, scratch.arcs[a].vertices) << "arc " << a;
+    EXPECT_EQ(read_again.arcs[a].target, scratch.arcs[a].target) << "arc " << a;
+  }
+  ASSERT_EQ(read_again.patches.size(), scratch.patches.size());
+  for (size_t p = 0; p < scratch.patches.size(); ++p) {
+    EXPECT_EQ(read_again.patches[p].faces, scratch.patches[p].faces) << "patch " << p;
+    EXPECT_EQ(read_again.patches[p].sides, scratch.patches[p].sides) << "patch " << p;
+    EXPECT_EQ(read_again.patches[p].cusps, scratch.patches[p].cusps) << "patch " << p;
+  }
+  EXPECT_EQ(read_again.recornered, scratch.recornered);
+}
+
 // Density follows the size field and the user's density (issue 5): on arches (two cages,
 // grid incidence) every cage has within 0.8–1.2× the quads its size field asks for
 // (QuadStats::size_field_quads, reported as size_field_quads; 0.92–1.05× now, 1.16–1.30×

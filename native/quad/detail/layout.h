@@ -178,10 +178,24 @@ struct PatchLayout {
 // Σ target (length / local size, at density 1) of the arcs on side k of `patch`.
 double side_target(const std::vector<Arc>& arcs, const Patch& patch, int k);
 
+// What build_patches read of a layout: its patches (faces, boundary cycles, corner
+// readings) and the layout as it was when they were read. Handed to the next
+// build_patches call on the same layout after a few changes (a merged patch, cusps taken
+// back), it lets that call read again only the patches around the changes. Owned by the
+// caller, one per layout; empty: everything is read.
+struct PatchReading {
+  PatchReading();
+  ~PatchReading();
+  struct State;
+  std::unique_ptr<State> state;
+};
+
 // Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
 // disks with extra traces. Throws Error{StageFailure} if some patch stays invalid.
+// `reading` (optional): what an earlier call on this layout read; updated to what this one
+// read. The patches are the same with or without it.
 PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& options,
-                          Messages& messages);
+                          Messages& messages, PatchReading* reading = nullptr);
 
 // Integer counts per arc (≥ 1, near length / size) with equal opposite sides, by an exact
 // integer program (quantize.cpp); false with the reason in `failure` if none exists.
