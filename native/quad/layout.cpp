@@ -24,6 +24,7 @@
 #include <cmath>
 #include <functional>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -360,6 +361,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
   std::vector<int>& halfedge_stamp = st.halfedge_stamp;
   std::vector<int>& boundary_at = st.boundary_at;
   int& visit = st.visit;  // stamp of an examination
+  int fewest_fixes = std::numeric_limits<int>::max(), fewest_round = 0;  // no-progress stop
   for (int round = 0;; ++round) {
     ++layout.patch_rounds;
     const auto [first_seen, fresh] =
@@ -695,12 +697,13 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         }
       }
       // A cusp patch collapses (fill.cpp) onto one curve, so it must be thin: the side
-      // across from its empty side under one target edge (interior arcs, which may quantize
-      // to 0) and the patch under half a target edge wide on average (area over length; a
-      // thin triangle on a base of one edge is that wide), or the collapse squeezes the
-      // quads beside it. Nor may it touch the component's border (a loop: the collapse glues
-      // its two long sides onto each other, and a chain must stay on its loop). Otherwise
-      // its cusps read as quarter turns and it is examined again.
+      // across from its empty side short (QuadOptions::cusp_collapse_across target edges;
+      // interior arcs may quantize to 0) and the patch narrow on average (area over length,
+      // cusp_collapse_width; a thin triangle on a base of one edge is half an edge wide),
+      // or the collapse squeezes the quads beside it. Nor may it touch the component's
+      // border (a loop: the collapse glues its two long sides onto each other, and a chain
+      // must stay on its loop). Otherwise its cusps read as quarter turns and it is
+      // examined again.
       bool cusp = false, collapsible = true;
       for (int k = 0; k < 4; ++k)
         if (patch.sides[k].empty()) {
@@ -708,8 +711,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           const double d = options.density;
           const double along = 0.5 * d * (side_target(out.arcs, patch, (k + 1) % 4) +
                                            side_target(out.arcs, patch, (k + 3) % 4));
-          collapsible &= side_target(out.arcs, patch, (k + 2) % 4) * d < 1 &&
-                         patch.quads * d * d / std::max(along, 1.0) < 0.5;
+          collapsible &=
+              side_target(out.arcs, patch, (k + 2) % 4) * d < options.cusp_collapse_across &&
+              patch.quads * d * d / std::max(along, 1.0) < options.cusp_collapse_width;
         }
       if (cusp) {
         for (const auto& arcs : patch.sides)
@@ -754,6 +758,16 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       out.patches.push_back(patch);
     }
     if (fixes.empty()) break;
+    // Rounds that leave no fewer patches to fix than the fewest so far trade one invalid
+    // patch for another (QuadOptions::fix_rounds_without_progress).
+    int required = 0;  // patches to fix, optional wedge cuts not counted
+    for (const Fix& fix : fixes) required += !fix.optional;
+    if (required < fewest_fixes) fewest_fixes = required, fewest_round = round;
+    const int stall = options.fix_rounds_without_progress;
+    GENBREP_CHECK(stall <= 0 || round - fewest_round < stall, Code::StageFailure,
+                  "quad: " + who + ": extra cuts make no progress: " + std::to_string(required) +
+                      " patches are still not four-sided disks after " + std::to_string(round) +
+                      " rounds, none fewer than after round " + std::to_string(fewest_round));
     GENBREP_CHECK(round < options.max_fix_rounds, Code::StageFailure,
                   "quad: " + who + ": " + std::to_string(fixes.size()) +
                       " patches are still not four-sided disks after " +

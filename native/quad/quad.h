@@ -90,6 +90,13 @@ struct QuadOptions {
   // one). Only where that patch is small and off the loops; false: such sectors read as
   // quarter turns.
   bool cusp_corners = true;
+  // A cusp patch collapses only while thin: on average under this many target edges wide
+  // (its area over its length), the side across from its empty side under
+  // cusp_collapse_across target edges. Wider ones read their cusps as quarter turns. At
+  // 0.5 and 1 (earlier versions) the 5 x 5 net's CLI cage had 100 irregular vertices away
+  // from singularities; at 0.75 and 1.5, 90 (docs/quad_method.md).
+  double cusp_collapse_width = 0.75;
+  double cusp_collapse_across = 1.5;
   // A four-cornered patch one of whose pairs of opposite sides differs by more than this
   // factor (the longer at least 3 cage edges) is a wedge, a triangle read as a rectangle:
   // quantization could balance it only by squeezing the longer side, so it gets one more
@@ -97,6 +104,12 @@ struct QuadOptions {
   double wedge_cut_ratio = 2.0;
   // Rounds of extra cuts for patches that are not disks with four corners.
   int max_fix_rounds = 64;
+  // Rounds of extra cuts stop (the layout choice fails) once this many rounds in a row
+  // have left no fewer patches to fix (optional wedge cuts not counted) than the fewest
+  // an earlier round left: such a layout keeps trading one invalid patch for another (the
+  // 5 x 5 net's requested layout: 2 to 5 for 55 rounds). The 3 x 3 net's requested
+  // layout needs 22 such rounds before its last patch becomes a disk. 0: never.
+  int fix_rounds_without_progress = 24;
   // Rounds of merging patches whose sides cannot balance, before quantization gives up.
   int max_balance_rounds = 8;
   // After the first layout choice whose cage meets issue 5's targets, further choices are

@@ -1330,32 +1330,73 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
   EXPECT_EQ(euler, 2 - 2 * 9 - scene.expected_loops);
 }
 
-// The extra cuts that make patches four-sided disks can cycle: on the 5 x 5 net at
-// h = 0.12 the requested layout's cut from a dangling separatrix's end pinches a patch whose
-// shortest open arc (the cut) is then taken off, leaving the dangling end again. The search
-// notices the layout it had two rounds before and gives up then, not after
-// max_fix_rounds (64) rounds of the same two layouts.
-TEST(Quad, ExtraCutsThatGiveBackAnEarlierLayoutStopThere) {
+// The extra cuts that make patches four-sided disks can fail to converge, and the search
+// gives up on the layout early in two ways. On the 5 x 5 net at h = 0.12 with the narrower
+// cusp collapse of earlier versions (0.5 target edges wide, 1 across), the requested
+// layout's cut from a dangling separatrix's end pinches a patch whose shortest open arc
+// (the cut) is then taken off, leaving the dangling end again: the search notices the
+// layout it had two rounds before and stops there. With the default collapse the same
+// layout trades a few invalid patches for others round after round (never a repeated
+// layout): it stops once QuadOptions::fix_rounds_without_progress rounds left no fewer than
+// the fewest, where without that stop it runs all max_fix_rounds (64) rounds and fails.
+TEST(Quad, ExtraCutsThatCycleOrMakeNoProgressStopEarly) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 5)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
-  QuadOptions options;
-  options.parallel_choices = 1;
-  options.work_per_component = 0;  // the requested layout only, then the fallback
-  const QuadResult result = extract_cages(r.mesh, r.partition, field, options, Context());
-  ASSERT_EQ(result.cages.size(), 1u);
-  EXPECT_EQ(check_cage(result.cages[0], r), 0);
-  const std::regex cycle("extra cuts of round ([0-9]+) give back the layout of round ([0-9]+)");
+  auto requested = [&](const QuadOptions& changed) {
+    QuadOptions options = changed;
+    options.parallel_choices = 1;
+    options.work_per_component = 0;  // the requested layout only, then the fallback
+    const QuadResult result = extract_cages(r.mesh, r.partition, field, options, Context());
+    EXPECT_EQ(result.cages.size(), 1u);
+    if (!result.cages.empty()) EXPECT_EQ(check_cage(result.cages[0], r), 0);
+    std::string all;
+    for (const auto& d : result.diagnostics) all += d + "\n";
+    return all;
+  };
+  const QuadOptions defaults;
   std::smatch match;
-  bool found = false;
-  for (const auto& d : result.diagnostics)
-    if (std::regex_search(d, match, cycle)) {
-      found = true;
-      const int round = std::stoi(match[1]), earlier = std::stoi(match[2]);
-      std::printf("[quad] net 5x5: the cuts of round %d gave back round %d's layout\n", round, earlier);
-      EXPECT_LT(earlier, round);
-      EXPECT_LT(round, options.max_fix_rounds);
-    }
-  EXPECT_TRUE(found) << "the requested layout did not stop on a repeated layout";
+  {
+    QuadOptions narrow;
+    narrow.cusp_collapse_width = 0.5;
+    narrow.cusp_collapse_across = 1;
+    narrow.fix_rounds_without_progress = 0;  // only a repeated layout stops it early
+    const std::string said = requested(narrow);
+    const std::regex cycle("extra cuts of round ([0-9]+) give back the layout of round ([0-9]+)");
+    ASSERT_TRUE(std::regex_search(said, match, cycle))
+        << "the requested layout did not stop on a repeated layout:\n"
+        << said;
+    const int round = std::stoi(match[1]), earlier = std::stoi(match[2]);
+    std::printf(
+        "[quad] net 5x5, narrow collapse: the cuts of round %d gave back round %d's layout\n",
+        round, earlier);
+    EXPECT_LT(earlier, round);
+    EXPECT_LT(round, defaults.max_fix_rounds);
+  }
+  {
+    const std::string said = requested(defaults);
+    const std::regex stall(
+        "extra cuts make no progress: ([0-9]+) patches are still not four-sided disks after "
+        "([0-9]+) rounds, none fewer than after round ([0-9]+)");
+    ASSERT_TRUE(std::regex_search(said, match, stall))
+        << "the requested layout did not stop for lack of progress:\n"
+        << said;
+    const int left = std::stoi(match[1]), round = std::stoi(match[2]), fewest = std::stoi(match[3]);
+    std::printf("[quad] net 5x5: %d patches left after round %d, none fewer than after round %d\n",
+                left, round, fewest);
+    EXPECT_GT(left, 0);
+    EXPECT_EQ(round - fewest, defaults.fix_rounds_without_progress);
+    EXPECT_LT(round, defaults.max_fix_rounds);
+  }
+  {
+    QuadOptions unstopped;
+    unstopped.fix_rounds_without_progress = 0;
+    const std::string said = requested(unstopped);
+    const std::regex all_rounds("still not four-sided disks after ([0-9]+) rounds of extra cuts");
+    ASSERT_TRUE(std::regex_search(said, match, all_rounds))
+        << "without the stop, the requested layout did not run out of rounds:\n"
+        << said;
+    EXPECT_EQ(std::stoi(match[1]), defaults.max_fix_rounds);
+  }
 }
 
 // The 3 × 3 net's requested layout: traced and built into patches with default options.
