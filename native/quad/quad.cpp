@@ -3,6 +3,7 @@
 #include "quad/quad.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -223,12 +224,12 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why);
 // it stays valid and its corners come closer to 90°.
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
-                            quad_detail::Messages* messages) {
+                            quad_detail::Messages* messages, const quad_detail::Dropped& dropped) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks.normals);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
     int collapsed = 0;
-    const int moved = quad_detail::untangle_cage(checks, *cage, 24, &collapsed);
+    const int moved = quad_detail::untangle_cage(checks, *cage, 24, &collapsed, dropped);
     stats = quad_detail::measure_cage(*cage, checks.normals);
     stats.collapsed_quads = collapsed;
     messages->warnings.push_back("component " + std::to_string(surface.component) + ": " +
@@ -245,7 +246,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // cancelled by diagonal collapses and edge rotations where the quads allow it; kept if
   // the cage stays valid.
   QuadCage cancelled = *cage;
-  if (const int pairs = quad_detail::cancel_irregular_pairs(checks, cancelled, 4)) {
+  if (const int pairs = quad_detail::cancel_irregular_pairs(checks, cancelled, 4, dropped)) {
     const QuadStats cancelled_stats = quad_detail::measure_cage(cancelled, checks.normals);
     std::string why;
     if (!cancelled_stats.flipped_quads && !cancelled_stats.degenerate_quads &&
@@ -263,7 +264,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
     }
   }
   QuadCage relaxed = *cage;
-  quad_detail::relax_cage(checks, relaxed, 10, 0.5);
+  quad_detail::relax_cage(checks, relaxed, 10, 0.5, dropped);
   QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks.normals);
   if (!relaxed_stats.flipped_quads && !relaxed_stats.degenerate_quads &&
       relaxed_stats.mean_angle_deviation_deg < stats.mean_angle_deviation_deg) {
@@ -283,12 +284,13 @@ void add_messages(const quad_detail::Messages& messages, QuadResult* out) {
 // The kept cage's corners are squared (square_cage: 10 sweeps), kept if it stays valid and
 // its corners come closer to 90°. Only the kept cage: layout choices are compared as
 // filled and evened out, where a distorted layout (a fan of rows over collapsed slivers)
-// still shows in its angles; squaring would hide that.
-void square_kept(const quad_detail::CageChecks& checks, double density, int c, QuadCage* cage,
-                 QuadStats* stats, Diagnostics* notes) {
+// still shows in its angles; squaring would hide that. On `threads` threads (the same result
+// for any number).
+void square_kept(const quad_detail::CageChecks& checks, double density, int c, int threads,
+                 QuadCage* cage, QuadStats* stats, Diagnostics* notes) {
   const auto start = std::chrono::steady_clock::now();
   QuadCage squared = *cage;
-  const int moved = quad_detail::square_cage(checks, squared, 10, density);
+  const int moved = quad_detail::square_cage(checks, squared, 10, density, threads);
   QuadStats measured = quad_detail::measure_cage(squared, checks.normals);
   if (measured.flipped_quads || measured.degenerate_quads ||
       measured.mean_angle_deviation_deg >= stats->mean_angle_deviation_deg)
@@ -393,12 +395,12 @@ struct AttemptWork {
 
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
-// is in `seen` (a layout an earlier choice already had). Reads only its arguments, so
-// attempts run on several threads at once.
+// is in `seen` (a layout an earlier choice already had), or once `dropped`. Reads only its
+// arguments, so attempts run on several threads at once.
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
-                  const QuadOptions& options, const std::set<std::size_t>& seen,
-                  LayoutKeys* keys, QuadCage* cage, QuadStats* stats,
-                  quad_detail::Messages* messages, AttemptWork* work) {
+                  const QuadOptions& options, const std::set<std::size_t>& seen, LayoutKeys* keys,
+                  QuadCage* cage, QuadStats* stats, quad_detail::Messages* messages,
+                  AttemptWork* work, const quad_detail::Dropped& dropped) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface);
@@ -436,6 +438,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   // Each round changes the layout in a few places: only the patches there are read again.
   quad_detail::PatchReading reading;
   for (int round = 0;; ++round) {
+    dropped.check();
     layout_messages = {};
     patches = quad_detail::build_patches(surface, layout, options, layout_messages, &reading);
     const bool quantized = quad_detail::quantize(patches, options, &failure, &relaxed);
@@ -481,11 +484,13 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   if (relaxed)
     messages->notes.push_back("component " + std::to_string(c) +
                            ": the layout's sides balance only with some interior arcs at 0 edges");
+  dropped.check();
   *cage = quad_detail::fill_patches(surface, layout, patches, *messages);
+  dropped.check();
   if (const int doublets = quad_detail::remove_doublets(*cage))
     messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
                            " doublets (interior vertices of two quads) removed");
-  *stats = measure_untangled(surface, checks, cage, messages);
+  *stats = measure_untangled(surface, checks, cage, messages, dropped);
   stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, kOversized);
   if (stats->oversized_quads) {
     char text[200];
@@ -724,10 +729,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     std::exception_ptr error;
     AttemptWork work;
   };
-  auto attempt = [&](size_t k, Attempt* a) {
+  auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
+                     const quad_detail::Dropped& dropped) {
     try {
-      extract_once(surface, checks, variants[k].options, seen_layouts, &a->keys, &a->cage,
-                   &a->stats, &a->messages, &a->work);
+      extract_once(surface, checks, variants[k].options, seen, &a->keys, &a->cage, &a->stats,
+                   &a->messages, &a->work, dropped);
       a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
           checks, a->cage, singular, variants[k].options.density);
     } catch (...) {
@@ -740,20 +746,37 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     if (first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) break;
     const size_t batch = std::min(variants.size() - k, static_cast<size_t>(threads));
     std::vector<Attempt> attempts(batch);
+    // The layouts seen before the batch, as every attempt of it reads them (the search
+    // adds to seen_layouts while later attempts still run).
+    const std::set<std::size_t> seen_before = seen_layouts;
+    // Results are taken as their attempts end, in order; once the search stops, the
+    // batch's later attempts are dropped (on the 6 x 6 net the requested layout's sibling
+    // ran 1.8 s past it, for a result the search would not look at). Also when a result
+    // throws: every worker is told and joined.
+    std::atomic<bool> drop{false};
     std::vector<std::thread> workers;
+    struct JoinAll {
+      std::atomic<bool>& drop;
+      std::vector<std::thread>& workers;
+      ~JoinAll() {
+        drop = true;
+        for (auto& worker : workers)
+          if (worker.joinable()) worker.join();
+      }
+    } join_all{drop, workers};
     for (size_t i = 1; i < batch; ++i)
       workers.emplace_back([&, i, first = k] {
-        attempt(first + i, &attempts[i]);
+        attempt(first + i, seen_before, &attempts[i], quad_detail::Dropped(&drop));
         quad_detail::release_quantize_thread();
       });
-    attempt(k, &attempts[0]);
-    for (auto& worker : workers) worker.join();
+    attempt(k, seen_before, &attempts[0], quad_detail::Dropped());
     for (size_t i = 0; i < batch && !stop; ++i, ++k) {
       if (i > 0 && ((first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) ||
                     out_of_work(k))) {
         stop = true;
         break;
       }
+      if (i > 0) workers[i - 1].join();
       Attempt& a = attempts[i];
       // Repeated layouts, as the sequential search sees them, and the work it would spend.
       bool grew = false, repeated = false;
@@ -830,7 +853,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                            ": the cage uses the layout with " + variants[best].what + " (" + why +
                            ")");
     }
-    square_kept(checks, variants[best].options.density, c, &best_cage, &best_stats, &out->notes);
+    square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
+                &out->notes);
     if (!meets_targets(best_stats)) {
       char text[240];
       std::snprintf(text, sizeof text,
@@ -861,7 +885,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
     cage = quad_detail::fallback_cage(coarse, factor * size);
     untangled = {};
-    stats = measure_untangled(surface, checks, &cage, &untangled);
+    stats = measure_untangled(surface, checks, &cage, &untangled, quad_detail::Dropped());
     scale = factor;
     std::string why;
     valid = !stats.flipped_quads && !stats.degenerate_quads && cage_is_manifold(cage, &why);
@@ -880,7 +904,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       " x the target) split into quads, not aligned with the field, "
       "with irregular vertices wherever triangles could not be paired");
   add_messages(untangled, out);
-  square_kept(checks, variants[0].options.density / scale, c, &cage, &stats, &out->notes);
+  square_kept(checks, variants[0].options.density / scale, c, threads, &cage, &stats, &out->notes);
   stats.irregular_off_singularities =
       quad_detail::irregular_off_singularities(checks, cage, singular, variants[0].options.density);
   out->cages.push_back(std::move(cage));

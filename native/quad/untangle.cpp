@@ -13,6 +13,8 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <thread>
+#include <vector>
 
 #include "quad/detail/layout.h"
 
@@ -207,7 +209,8 @@ int remove_doublets(QuadCage& cage) {
   return removed_total;
 }
 
-int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step) {
+int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step,
+               const Dropped& dropped) {
   const ComponentLocator& locator = checks.locator;
   const DesignNormals& normals = checks.normals;
   const int nv = static_cast<int>(cage.vertices.rows());
@@ -217,6 +220,7 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
   const auto& quads_of = incidence.quads_of;
   int moved = 0;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
+    dropped.check();
     moved = 0;
     for (int v = 0; v < nv; ++v) {
       if (fixed[v] || neighbours[v].empty()) continue;
@@ -244,7 +248,7 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
   return moved;
 }
 
-int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density) {
+int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density, int threads) {
   const ComponentLocator& locator = checks.locator;
   const DesignNormals& normals = checks.normals;
   const int nv = static_cast<int>(cage.vertices.rows());
@@ -359,64 +363,111 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
   std::vector<char> active(in_rows), moved_now(nv, 0);
   std::vector<int> hint(nv, -1);  // each vertex's last triangle (ComponentLocator::closest)
   std::vector<double> last_step(nv, 0.1);  // over the vertex's mean edge length
+  // One vertex's step; true if it moved. Reads the corners of its quads and the far ends
+  // of the rows through its neighbours, writes only its own position and state.
+  auto step_vertex = [&](int v) {
+    const Vec3 old = point(v);
+    Vec3 normal;
+    const Vec3 at = locator.closest(old, &normal, &hint[v]);
+    double length = 0;
+    for (int w : ring[v]) length += 0.25 * (point(w) - at).norm();
+    if (length <= 0) return false;
+    // No edge grows past twice the target length unless it came longer (oversized
+    // quads, QuadStats, are those past 2.5x), nor shrinks under half of it unless it
+    // came shorter.
+    const int near = normals.nearest_vertex(at);
+    const double target = near >= 0 ? checks.surface.vertex_size[near] / density
+                                    : std::numeric_limits<double>::quiet_NaN();
+    auto out_of_range = [&](const Vec3& p) {
+      if (!(target > 0)) return false;
+      for (int w : ring[v]) {
+        const double now = (p - point(w)).norm(), was = rest_length(v, w);
+        if ((now > 2 * target && now > was) || (now < 0.5 * target && now < was)) return true;
+      }
+      return false;
+    };
+    // A gradient step in the tangent plane (forward differences), at most a tenth of
+    // the edges around: the vertex's last good step, or half of it until the energy
+    // drops; a good step grows by half for the next sweep.
+    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    const double h = 1e-5 * length;
+    const double before = energy(v, at);
+    const Vec3 gradient =
+        t1 * (energy(v, at + h * t1) - before) / h + t2 * (energy(v, at + h * t2) - before) / h;
+    const double slope = gradient.norm();
+    if (slope == 0) return false;
+    double step = std::min({0.1 * length, before / slope, last_step[v] * length});
+    for (int tries = 0; tries < 4; ++tries, step *= 0.5) {
+      Vec3 landed_normal;
+      int landed_hint = hint[v];
+      const Vec3 landed =
+          locator.closest(at - step * gradient / slope, &landed_normal, &landed_hint);
+      if (landed_normal.dot(normal) < 0.5) continue;
+      if (energy(v, landed) >= before || out_of_range(landed)) continue;
+      cage.vertices.row(v) = landed.transpose();
+      bool ok = true;
+      for (int q : quads_of[v])
+        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
+      if (ok) {
+        hint[v] = landed_hint;
+        last_step[v] = 1.5 * step / length;
+        return true;
+      }
+      cage.vertices.row(v) = old.transpose();
+    }
+    return false;
+  };
+  // Vertices that read each other's positions never step at once: they get different
+  // colours (greedy, in vertex order), and a sweep takes the colours in turn, the
+  // vertices of one colour on `threads` threads. The result does not depend on the
+  // number of threads.
+  std::vector<std::vector<int>> reads(nv);  // symmetric
+  for (int v = 0; v < nv; ++v) {
+    if (!in_rows[v]) continue;
+    auto link = [&](int u) {
+      if (u != v) reads[v].push_back(u), reads[u].push_back(v);
+    };
+    for (int q : quads_of[v])
+      for (int k = 0; k < 4; ++k) link(cage.quads(q, k));
+    for (int w : ring[v])
+      if (in_rows[w])
+        for (int u : ring[w]) link(u);
+  }
+  std::vector<int> colour(nv, -1);
+  std::vector<std::vector<int>> by_colour;
+  std::vector<int> taken_by(nv, -1);  // colour → the last vertex that saw it taken
+  for (int v = 0; v < nv; ++v) {
+    if (!in_rows[v]) continue;
+    for (int u : reads[v])
+      if (colour[u] >= 0) taken_by[colour[u]] = v;
+    int c = 0;
+    while (taken_by[c] == v) ++c;
+    colour[v] = c;
+    if (c >= static_cast<int>(by_colour.size())) by_colour.resize(c + 1);
+    by_colour[c].push_back(v);
+  }
+  const int workers = std::max(1, threads);
   int moved = 0;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
-    moved = 0;
     std::fill(moved_now.begin(), moved_now.end(), 0);
-    for (int v = 0; v < nv; ++v) {
-      if (!active[v]) continue;  // chain and irregular vertices stay put
-      const Vec3 old = point(v);
-      Vec3 normal;
-      const Vec3 at = locator.closest(old, &normal, &hint[v]);
-      double length = 0;
-      for (int w : ring[v]) length += 0.25 * (point(w) - at).norm();
-      if (length <= 0) continue;
-      // No edge grows past twice the target length unless it came longer (oversized
-      // quads, QuadStats, are those past 2.5x), nor shrinks under half of it unless it
-      // came shorter.
-      const int near = normals.nearest_vertex(at);
-      const double target = near >= 0 ? checks.surface.vertex_size[near] / density
-                                      : std::numeric_limits<double>::quiet_NaN();
-      auto out_of_range = [&](const Vec3& p) {
-        if (!(target > 0)) return false;
-        for (int w : ring[v]) {
-          const double now = (p - point(w)).norm(), was = rest_length(v, w);
-          if ((now > 2 * target && now > was) || (now < 0.5 * target && now < was)) return true;
-        }
-        return false;
+    for (const std::vector<int>& group : by_colour) {
+      auto run = [&](size_t first, size_t last) {
+        for (size_t i = first; i < last; ++i)
+          if (active[group[i]]) moved_now[group[i]] = step_vertex(group[i]);
       };
-      // A gradient step in the tangent plane (forward differences), at most a tenth of
-      // the edges around: the vertex's last good step, or half of it until the energy
-      // drops; a good step grows by half for the next sweep.
-      const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
-      const double h = 1e-5 * length;
-      const double before = energy(v, at);
-      const Vec3 gradient = t1 * (energy(v, at + h * t1) - before) / h +
-                            t2 * (energy(v, at + h * t2) - before) / h;
-      const double slope = gradient.norm();
-      if (slope == 0) continue;
-      double step = std::min({0.1 * length, before / slope, last_step[v] * length});
-      for (int tries = 0; tries < 4; ++tries, step *= 0.5) {
-        Vec3 landed_normal;
-        int landed_hint = hint[v];
-        const Vec3 landed =
-            locator.closest(at - step * gradient / slope, &landed_normal, &landed_hint);
-        if (landed_normal.dot(normal) < 0.5) continue;
-        if (energy(v, landed) >= before || out_of_range(landed)) continue;
-        cage.vertices.row(v) = landed.transpose();
-        bool ok = true;
-        for (int q : quads_of[v])
-          ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
-        if (ok) {
-          ++moved;
-          moved_now[v] = 1;
-          hint[v] = landed_hint;
-          last_step[v] = 1.5 * step / length;
-          break;
-        }
-        cage.vertices.row(v) = old.transpose();
+      const size_t n = group.size();
+      if (workers == 1 || n < 64) {
+        run(0, n);
+        continue;
       }
+      std::vector<std::thread> pool;
+      for (int t = 1; t < workers; ++t)
+        pool.emplace_back(run, n * t / workers, n * (t + 1) / workers);
+      run(0, n / workers);
+      for (auto& thread : pool) thread.join();
     }
+    moved = 0;
+    for (int v = 0; v < nv; ++v) moved += moved_now[v];
     for (int v = 0; v < nv; ++v) {
       if (!in_rows[v]) continue;
       active[v] = moved_now[v];
@@ -630,9 +681,11 @@ int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage) {
   return done;
 }
 
-int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds) {
+int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
+                           const Dropped& dropped) {
   int total = 0;
   for (int round = 0; round < max_rounds; ++round) {
+    dropped.check();
     int now = cancel_pairs_once(checks, cage, 4);
     if (!now) now = rotate_edges_for_pairs(checks, cage);
     if (!now) break;
@@ -641,7 +694,8 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
   return total;
 }
 
-int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed) {
+int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed,
+                  const Dropped& dropped) {
   const ComponentLocator& locator = checks.locator;
   const DesignNormals& normals = checks.normals;
   std::vector<int> bad;
@@ -653,6 +707,7 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
   // needed more than 8.
   *collapsed = 0;
   for (int attempt = 0; attempt < 32 && !bad.empty(); ++attempt) {
+    dropped.check();
     int now = collapse_diagonals(locator, cage, bad);
     // Its other corners have 3 quads each: collapse anyway and join the doublets left.
     if (!now && (now = collapse_diagonals(locator, cage, bad, {}, nullptr, true)))

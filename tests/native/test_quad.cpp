@@ -3,6 +3,7 @@
 // orientation from the quads alone, each quad's normal against the design's nearest
 // triangle, and every boundary chain against its partition loop's polyline.
 #include <algorithm>
+#include <atomic>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -800,6 +801,46 @@ TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
   EXPECT_EQ(interior_valences(rotated), (std::map<int, int>{{4, 25}}));
 }
 
+// Squaring moves the vertices of one colour (no two reading each other's positions) on
+// several threads: a 41 × 41 flat cage with its inner vertices pushed along x by
+// 0.3 sin(πx/5) sin(πy/5) (1521 free vertices, 7 colours) squares to exactly the same
+// vertices on 1, 2 and 3 threads, its mean corner deviation more than halved. The
+// evening out gives up once its attempt is dropped (a sibling layout choice made the
+// search stop), and not before.
+TEST(Quad, SquaringIsTheSameOnAnyNumberOfThreadsAndADroppedEveningOutStops) {
+  const FlatGrid flat(201, 0.2);  // the square [0, 40]², target size 1
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  const int m = 41;
+  QuadCage sheared = regular_flat_cage(m);
+  for (int i = 1; i + 1 < m; ++i)
+    for (int j = 1; j + 1 < m; ++j)
+      sheared.vertices(i * m + j, 0) += 0.3 * std::sin(M_PI * j / 5) * std::sin(M_PI * i / 5);
+  ASSERT_EQ(bad_flat_quads(sheared), 0);
+  const double before = quad_detail::measure_cage(sheared, checks.normals).mean_angle_deviation_deg;
+  ASSERT_GT(before, 3.0);
+  QuadCage one = sheared;
+  const int moved = quad_detail::square_cage(checks, one, 10, 1.0, 1);
+  EXPECT_GT(moved, 0);
+  EXPECT_LT(quad_detail::measure_cage(one, checks.normals).mean_angle_deviation_deg, before / 2);
+  EXPECT_EQ(bad_flat_quads(one), 0);
+  for (int threads : {2, 3}) {
+    QuadCage many = sheared;
+    EXPECT_EQ(quad_detail::square_cage(checks, many, 10, 1.0, threads), moved);
+    EXPECT_TRUE(many.vertices == one.vertices) << threads << " threads";
+  }
+
+  std::atomic<bool> drop{false};
+  QuadCage relaxed = sheared;
+  EXPECT_NO_THROW(quad_detail::relax_cage(checks, relaxed, 2, 0.5, quad_detail::Dropped(&drop)));
+  EXPECT_FALSE(relaxed.vertices == sheared.vertices);
+  drop = true;
+  QuadCage dropped = sheared;
+  EXPECT_THROW(quad_detail::relax_cage(checks, dropped, 2, 0.5, quad_detail::Dropped(&drop)),
+               Error);
+  EXPECT_TRUE(dropped.vertices == sheared.vertices);
+}
+
 // Squaring a sheared cage: the regular 7 × 7 flat cage with its inner vertices pushed
 // along x by 0.35 sin(πx/6) sin(πy/6)·(y − 3) (boundary kept) has sheared quads; squared,
 // its mean corner deviation drops to under a third, its rows stay as even (second
@@ -1348,7 +1389,9 @@ TEST(Quad, ExtraCutsThatCycleOrMakeNoProgressStopEarly) {
     options.work_per_component = 0;  // the requested layout only, then the fallback
     const QuadResult result = extract_cages(r.mesh, r.partition, field, options, Context());
     EXPECT_EQ(result.cages.size(), 1u);
-    if (!result.cages.empty()) EXPECT_EQ(check_cage(result.cages[0], r), 0);
+    if (!result.cages.empty()) {
+      EXPECT_EQ(check_cage(result.cages[0], r), 0);
+    }
     std::string all;
     for (const auto& d : result.diagnostics) all += d + "\n";
     return all;

@@ -3,6 +3,7 @@
 #pragma once
 #include <Eigen/Dense>
 #include <array>
+#include <atomic>
 #include <map>
 #include <memory>
 #include <set>
@@ -21,6 +22,23 @@ namespace genbrep::quad_detail {
 // What a step says about its work, as QuadResult splits it: `warnings` where the cage
 // falls short of what was asked (a repair, a squeezed quad, a fallback), `notes` on how it
 // was made (refinement, collapsed slivers, the layout choice kept).
+// Set by the layout search once an attempt's result can no longer be used (an earlier
+// choice of the same batch made the search stop, quad.cpp): the attempt gives up at its
+// next check (between phases, sweeps, rounds) instead of running to its end. Default: never.
+class Dropped {
+ public:
+  Dropped() = default;
+  explicit Dropped(const std::atomic<bool>* flag) : flag_(flag) {}
+  // Throws Error{StageFailure} once the attempt is dropped.
+  void check() const {
+    GENBREP_CHECK(!flag_ || !flag_->load(std::memory_order_relaxed), Code::StageFailure,
+                  "quad: a layout choice dropped (the search stopped before it)");
+  }
+
+ private:
+  const std::atomic<bool>* flag_ = nullptr;
+};
+
 struct Messages {
   Diagnostics warnings;
   Diagnostics notes;
@@ -330,7 +348,8 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 // looks for new candidates; a round with no collapse tries edge rotations
 // (rotate_edges_for_pairs); at most `max_rounds` rounds. Returns the collapses and
 // rotations (0: the cage is unchanged).
-int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds);
+int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
+                           const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
@@ -341,7 +360,8 @@ int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage);
 // the mean of its neighbours, in its tangent plane and back onto the component; a move
 // that would make one of its quads squeezed or turned over is undone. Returns the vertices
 // moved in the last sweep.
-int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step);
+int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step,
+               const Dropped& dropped = Dropped());
 // Squares a valid cage's quads: for `sweeps` sweeps every free vertex takes a gradient
 // step (in its tangent plane, back onto the component) on the squared deviations of the
 // corners it moves (its own and its neighbours' in its quads) from their ideal angles
@@ -349,15 +369,19 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
 // filled, shared evenly); a step that does not lower them, or makes a quad squeezed or
 // turned over, or makes an edge longer than twice the target length (size field over
 // `density`) and than it was, is refused. Irregular and chain vertices stay. Returns the
-// vertices moved in the last sweep.
-int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density);
+// vertices moved in the last sweep. Vertices that read each other's positions never move
+// at once; the others of a sweep move on `threads` threads (the same result for any
+// number).
+int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density,
+                int threads = 1);
 // Removes doublets: an interior cage vertex with only two quads, which share two edges,
 // goes and the two quads become one. Returns how many (collapsed sliver patches leave
 // them; the limit surface folds at a doublet).
 int remove_doublets(QuadCage& cage);
 // Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
 // and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
-int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed);
+int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed,
+                  const Dropped& dropped = Dropped());
 
 // Whether cage a is to be kept rather than cage b among a component's layout choices:
 // meeting issue 5's targets, then no collapsed quad, then (both meeting) fewer irregular
