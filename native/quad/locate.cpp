@@ -50,10 +50,13 @@ Vec3 ComponentLocator::closest(const Vec3& p, Vec3* normal) const {
 
 Vec3 ComponentLocator::closest(const Vec3& p, Vec3* normal, int* hint) const {
   const Kernel::Point_3 query(p.x(), p.y(), p.z());
+  // The hint's own closest point bounds the search: with a hint from a nearby query (a
+  // vertex moved a little) only the few triangles closer than it are looked at.
   const auto hit =
       *hint >= 0 && *hint < static_cast<int>(impl_->triangles.size())
           ? impl_->tree.closest_point_and_primitive(
-                query, {impl_->triangles[*hint].vertex(0), impl_->triangles.begin() + *hint})
+                query, {Kernel::Construct_projected_point_3()(impl_->triangles[*hint], query),
+                        impl_->triangles.begin() + *hint})
           : impl_->tree.closest_point_and_primitive(query);
   *hint = static_cast<int>(hit.second - impl_->triangles.begin());
   if (normal) *normal = surface_.face_normal[impl_->face[*hint]];

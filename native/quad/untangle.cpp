@@ -42,9 +42,10 @@ constexpr double kStretchWeight = 1.0;
 constexpr double kFairWeight = 1.0;
 
 // A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
-// or against the component face under its centroid.
+// or against the component face under its centroid. `hint`: the triangle under the
+// centroid when last looked at (ComponentLocator::closest; updated), or null.
 bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
-                 const QuadCage& cage, int q, double min_corner_degrees) {
+                 const QuadCage& cage, int q, double min_corner_degrees, int* hint = nullptr) {
   Vec3 c[4];
   for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
   for (int k = 0; k < 4; ++k) {
@@ -54,7 +55,8 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
   }
   if (normals.flipped(c)) return true;
   Vec3 normal;
-  locator.closest(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal);
+  int near = -1;
+  locator.closest(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal, hint ? hint : &near);
   return (c[2] - c[0]).cross(c[3] - c[1]).dot(normal) <= 0;
 }
 
@@ -62,14 +64,18 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
 std::set<int> smooth_cage(const ComponentLocator& locator, const DesignNormals& normals,
                           QuadCage& cage, int max_rounds, double min_corner_degrees,
                           std::vector<int>* still_bad) {
-  auto project = [&](const Vec3& p, Vec3* normal) { return locator.closest(p, normal); };
+  // Each vertex's and quad centroid's last triangle (ComponentLocator::closest): the
+  // search starts there.
+  std::vector<int> hint(cage.vertices.rows(), -1), quad_hint(cage.quads.rows(), -1);
   const int nq = static_cast<int>(cage.quads.rows());
   const CageIncidence incidence(cage);
   const auto& neighbours = incidence.neighbours;
   const auto& fixed = incidence.on_chain;
   const auto& quads_of = incidence.quads_of;
   auto point = [&](int v) { return Vec3(cage.vertices.row(v).transpose()); };
-  auto bad = [&](int q) { return quad_is_bad(locator, normals, cage, q, min_corner_degrees); };
+  auto bad = [&](int q) {
+    return quad_is_bad(locator, normals, cage, q, min_corner_degrees, &quad_hint[q]);
+  };
   // Each round smooths the free vertices within 1 + round / 4 rings of a bad quad (the
   // region grows while the repair does not succeed). A vertex moves within its tangent
   // plane and is projected back; a move whose projection lands on a face facing another
@@ -103,15 +109,17 @@ std::set<int> smooth_cage(const ComponentLocator& locator, const DesignNormals& 
       for (int v : region) {
         if (fixed[v] || neighbours[v].empty()) continue;
         Vec3 normal;
-        const Vec3 at = project(point(v), &normal);
+        const Vec3 at = locator.closest(point(v), &normal, &hint[v]);
         Vec3 mean = Vec3::Zero();
         for (int w : neighbours[v]) mean += point(w);
         mean /= static_cast<double>(neighbours[v].size());
         Vec3 step = mean - at;
         step -= step.dot(normal) * normal;
         Vec3 landed_normal;
-        const Vec3 landed = project(at + step, &landed_normal);
+        int landed_hint = hint[v];
+        const Vec3 landed = locator.closest(at + step, &landed_normal, &landed_hint);
         if (landed_normal.dot(normal) < 0.5) continue;
+        hint[v] = landed_hint;
         cage.vertices.row(v) = landed.transpose();
         moved_now.insert(v);
       }
@@ -219,6 +227,8 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
   const auto& fixed = incidence.on_chain;
   const auto& quads_of = incidence.quads_of;
   int moved = 0;
+  // Each vertex's and quad centroid's last triangle (ComponentLocator::closest).
+  std::vector<int> hint(nv, -1), quad_hint(cage.quads.rows(), -1);
   for (int sweep = 0; sweep < sweeps; ++sweep) {
     dropped.check();
     moved = 0;
@@ -226,23 +236,26 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
       if (fixed[v] || neighbours[v].empty()) continue;
       const Vec3 old = cage.vertices.row(v).transpose();
       Vec3 normal;
-      const Vec3 at = locator.closest(old, &normal);
+      const Vec3 at = locator.closest(old, &normal, &hint[v]);
       Vec3 mean = Vec3::Zero();
       for (int w : neighbours[v]) mean += cage.vertices.row(w).transpose();
       mean /= static_cast<double>(neighbours[v].size());
       Vec3 d = step * (mean - at);
       d -= d.dot(normal) * normal;
       Vec3 landed_normal;
-      const Vec3 landed = locator.closest(at + d, &landed_normal);
+      int landed_hint = hint[v];
+      const Vec3 landed = locator.closest(at + d, &landed_normal, &landed_hint);
       if (landed_normal.dot(normal) < 0.5) continue;
       cage.vertices.row(v) = landed.transpose();
       bool ok = true;
       for (int q : quads_of[v])
-        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
-      if (!ok)
+        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees, &quad_hint[q]);
+      if (!ok) {
         cage.vertices.row(v) = old.transpose();
-      else
+      } else {
+        hint[v] = landed_hint;
         ++moved;
+      }
     }
   }
   return moved;
@@ -361,7 +374,9 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
   for (int v = 0; v < nv; ++v) in_rows[v] &= !crowded[v];
   // A vertex is looked at again only once it or a neighbour has moved.
   std::vector<char> active(in_rows), moved_now(nv, 0);
-  std::vector<int> hint(nv, -1);  // each vertex's last triangle (ComponentLocator::closest)
+  // Each vertex's and quad centroid's last triangle (ComponentLocator::closest); a quad's
+  // is written only by its corners, which never step at once (below).
+  std::vector<int> hint(nv, -1), quad_hint(cage.quads.rows(), -1);
   std::vector<double> last_step(nv, 0.1);  // over the vertex's mean edge length
   // One vertex's step; true if it moved. Reads the corners of its quads and the far ends
   // of the rows through its neighbours, writes only its own position and state.
@@ -407,7 +422,7 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
       cage.vertices.row(v) = landed.transpose();
       bool ok = true;
       for (int q : quads_of[v])
-        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees);
+        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees, &quad_hint[q]);
       if (ok) {
         hint[v] = landed_hint;
         last_step[v] = 1.5 * step / length;
