@@ -447,6 +447,10 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       // (vertex list; a dangling separatrix, or the shortest arc of a sliver patch).
       std::vector<int> remove_stretch;
       bool optional = false;  // a wedge's cut: the patch stays as it is if none traces
+      // A pinched disk (its boundary passes a vertex twice): first a cut between the two
+      // stretches of its boundary either side of that vertex (cut_pinch), through `faces`.
+      std::vector<int> pinch_from, pinch_to;
+      const std::vector<int>* faces = nullptr;
     };
     // The shortest arc of an open curve on the patch boundary, to merge the patch with its
     // neighbour when it cannot be cut.
@@ -476,9 +480,15 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       }
     };
     std::vector<Fix> fixes;
-    // Cuts from the non-node vertices of the cycles, the farthest from any node first.
+    // Cuts from the non-node vertices of the cycles, the farthest from any node first, at
+    // most options.middle_cuts_per_stretch from one stretch between nodes: the middle of
+    // one long arc may lie where the patch is a strip one triangle wide, and no cut traces
+    // there (the 6 x 6 net's requested layout cycled on such a patch, its 24 cuts all
+    // from one arc).
     auto middle_cuts = [&](const std::vector<Cycle>& cycles) {
       std::vector<std::pair<int, Cut>> ranked;
+      std::vector<int> stretch_of;  // per ranked entry: its stretch (cycle and run of it)
+      int stretches = 0;
       for (const Cycle& c : cycles) {
         const int n = static_cast<int>(c.halfedges.size());
         std::vector<int> gap(n, n);
@@ -489,14 +499,31 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
             if (layout.node[s.from(c.halfedges[i])]) gap[i] = 0;
             else gap[i] = std::min(gap[i], gap[j] + 1);
           }
-        for (int i = 0; i < n; ++i)
+        // Stretches are numbered from the cycle's first node on (before it: the last one).
+        int first_node = 0;
+        while (first_node < n && !layout.node[s.from(c.halfedges[first_node])]) ++first_node;
+        std::vector<int> run(n, stretches);
+        for (int t = 0, r = stretches; t < n; ++t) {
+          const int i = (first_node + t) % n;
+          if (t > 0 && layout.node[s.from(c.halfedges[i])]) ++r;
+          run[i] = r, stretches = std::max(stretches, r + 1);
+        }
+        for (int i = 0; i < n; ++i) {
           ranked.push_back({-gap[i], Cut{s.from(c.halfedges[i]), c.halfedges[i],
                                          c.halfedges[(i + n - 1) % n] ^ 1, 0.5}});
+          stretch_of.push_back(run[i]);
+        }
       }
-      std::stable_sort(ranked.begin(), ranked.end(),
-                       [](const auto& a, const auto& b) { return a.first < b.first; });
+      std::vector<int> order(ranked.size());
+      for (size_t k = 0; k < order.size(); ++k) order[k] = static_cast<int>(k);
+      std::stable_sort(order.begin(), order.end(),
+                       [&](int a, int b) { return ranked[a].first < ranked[b].first; });
+      std::vector<int> taken(stretches, 0);
       Fix fix;
-      for (size_t k = 0; k < ranked.size() && k < 24; ++k) fix.cuts.push_back(ranked[k].second);
+      for (int k : order)
+        if (fix.cuts.size() < 24 && (options.middle_cuts_per_stretch <= 0 ||
+                                     taken[stretch_of[k]]++ < options.middle_cuts_per_stretch))
+          fix.cuts.push_back(ranked[k].second);
       return fix;
     };
     // The new patches' boundary cycles, Euler characteristic and corner readings.
@@ -574,10 +601,12 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       const std::vector<int>& faces = patches_in_order[p]->faces;
       const long chi = patches_in_order[p]->chi;
       std::vector<Cycle>& cycles = patches_in_order[p]->cycles;
+      // An override read where the layout was different (the halfedge a corner then) never
+      // hides a dangling end.
       for (Cycle& c : cycles)
         for (Corner& k : c.nodes) {
           auto o = quarter_override.find(k.halfedge_out);
-          k.quarters = o != quarter_override.end() ? o->second : k.read;
+          k.quarters = o != quarter_override.end() && k.read != 4 ? o->second : k.read;
         }
       bool repeated = false;
       if (cycles.size() == 1) {
@@ -613,6 +642,33 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
           // If no cut traces (an annulus too thin to cross, e.g. around a strut): its
           // shortest open arc goes, merging it with a neighbour.
           fixes.back().remove_stretch = shortest_open_arc_of(cycles);
+          if (repeated && chi == 1) {
+            // The stretches before and after the first vertex the cycle passes twice (a
+            // vertex in both belongs to neither).
+            std::vector<int> cv;
+            for (int h : cycles[0].halfedges) cv.push_back(s.from(h));
+            const int n = static_cast<int>(cv.size());
+            std::map<int, int> first_at;
+            int i = -1, j = -1;
+            for (int k = 0; k < n && j < 0; ++k) {
+              const auto [it, fresh] = first_at.insert({cv[k], k});
+              if (!fresh) i = it->second, j = k;
+            }
+            std::vector<int> inside(cv.begin() + i + 1, cv.begin() + j), outside;
+            for (int k = j + 1; k < n + i; ++k) outside.push_back(cv[k % n]);
+            std::sort(inside.begin(), inside.end());
+            std::sort(outside.begin(), outside.end());
+            Fix& fix = fixes.back();
+            std::set_difference(inside.begin(), inside.end(), outside.begin(), outside.end(),
+                                std::back_inserter(fix.pinch_from));
+            std::set_difference(outside.begin(), outside.end(), inside.begin(), inside.end(),
+                                std::back_inserter(fix.pinch_to));
+            fix.pinch_from.erase(std::remove(fix.pinch_from.begin(), fix.pinch_from.end(), cv[i]),
+                                 fix.pinch_from.end());
+            fix.pinch_to.erase(std::remove(fix.pinch_to.begin(), fix.pinch_to.end(), cv[i]),
+                               fix.pinch_to.end());
+            fix.faces = &faces;
+          }
         }
         continue;
       }
@@ -775,6 +831,11 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     int traced = 0;
     for (const Fix& fix : fixes) {
       bool done = false;
+      if (fix.faces && options.cut_pinches &&
+          cut_pinch(s, layout, *fix.faces, fix.pinch_from, fix.pinch_to)) {
+        done = true;
+        ++out.pinches_cut;
+      }
       for (int pass = 0; pass < 2 && !done; ++pass)  // field-aligned first, then straight
         for (const Cut& cut : fix.cuts)
           if (trace_from(s, layout, cut.vertex, cut.first, cut.last, cut.fraction, pass == 0)) {
@@ -801,6 +862,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     GENBREP_CHECK(traced > 0, Code::StageFailure,
                   "quad: " + who + ": no extra cut could be traced into an invalid patch");
   }
+  if (out.pinches_cut)
+    messages.notes.push_back(who + ": " + std::to_string(out.pinches_cut) +
+                          " pinched patches (boundary through one vertex twice) cut across");
   if (out.removed_stretches)
     messages.notes.push_back(who + ": " + std::to_string(out.removed_stretches) +
                           " stretches of separatrices removed (dangling, or enclosing a patch "

@@ -281,35 +281,55 @@ void add_messages(const quad_detail::Messages& messages, QuadResult* out) {
   out->notes.insert(out->notes.end(), messages.notes.begin(), messages.notes.end());
 }
 
-// The kept cage's corners are squared (square_cage: 10 sweeps), kept if it stays valid and
-// its corners come closer to 90°. Only the kept cage: layout choices are compared as
-// filled and evened out, where a distorted layout (a fan of rows over collapsed slivers)
-// still shows in its angles; squaring would hide that. On `threads` threads (the same result
-// for any number).
-void square_kept(const quad_detail::CageChecks& checks, double density, int c, int threads,
-                 QuadCage* cage, QuadStats* stats, Diagnostics* notes) {
+// A cage with its corners squared (square_cage: 10 sweeps, on `threads` threads, the same
+// result for any number), if it stays valid and its corners come closer to 90°.
+struct Squared {
+  QuadCage cage;
+  double mean_deg = 0, max_deg = 0;  // corner deviation after squaring
+  int oversized_quads = 0, moved = 0;
+  double seconds = 0;
+};
+std::optional<Squared> square_copy(const quad_detail::CageChecks& checks, double density,
+                                   int threads, const QuadCage& cage, const QuadStats& stats) {
   const auto start = std::chrono::steady_clock::now();
-  QuadCage squared = *cage;
-  const int moved = quad_detail::square_cage(checks, squared, 10, density, threads);
-  QuadStats measured = quad_detail::measure_cage(squared, checks.normals);
+  Squared out{cage};
+  out.moved = quad_detail::square_cage(checks, out.cage, 10, density, threads);
+  const QuadStats measured = quad_detail::measure_cage(out.cage, checks.normals);
   if (measured.flipped_quads || measured.degenerate_quads ||
-      measured.mean_angle_deviation_deg >= stats->mean_angle_deviation_deg)
-    return;
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      measured.mean_angle_deviation_deg >= stats.mean_angle_deviation_deg)
+    return std::nullopt;
+  out.mean_deg = measured.mean_angle_deviation_deg;
+  out.max_deg = measured.max_angle_deviation_deg;
+  out.oversized_quads = quad_detail::oversized_quads(checks, out.cage, density, kOversized);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+// The kept cage takes its squared copy (square_copy, or the one its attempt made already),
+// reported. Only the kept cage: layout choices are compared as filled and evened out,
+// where a distorted layout (a fan of rows over collapsed slivers) still shows in its
+// angles; squaring would hide that.
+void keep_squared(const Squared& squared, int c, QuadCage* cage, QuadStats* stats,
+                  Diagnostics* notes) {
   char text[200];
   std::snprintf(text, sizeof text,
                 "component %d: corners squared (%d cage vertices moved in the last sweep, "
                 "%.1f s): mean deviation from 90° %.1f° → %.1f°",
-                c, moved, seconds, stats->mean_angle_deviation_deg,
-                measured.mean_angle_deviation_deg);
+                c, squared.moved, squared.seconds, stats->mean_angle_deviation_deg,
+                squared.mean_deg);
   notes->push_back(text);
   // Vertices moved, the topology did not: only the angles change.
-  stats->mean_angle_deviation_deg = measured.mean_angle_deviation_deg;
-  stats->max_angle_deviation_deg = measured.max_angle_deviation_deg;
-  stats->oversized_quads = quad_detail::oversized_quads(checks, squared, density, kOversized);
-  stats->seconds += seconds;
-  *cage = std::move(squared);
+  stats->mean_angle_deviation_deg = squared.mean_deg;
+  stats->max_angle_deviation_deg = squared.max_deg;
+  stats->oversized_quads = squared.oversized_quads;
+  stats->seconds += squared.seconds;
+  *cage = squared.cage;
+}
+
+void square_kept(const quad_detail::CageChecks& checks, double density, int c, int threads,
+                 QuadCage* cage, QuadStats* stats, Diagnostics* notes) {
+  if (const auto squared = square_copy(checks, density, threads, *cage, *stats))
+    keep_squared(*squared, c, cage, stats, notes);
 }
 
 // Whether the cage is an oriented 2-manifold whose limit surface can be built: every
@@ -579,7 +599,9 @@ namespace quad_detail {
 // counts within 5% are even: lattice's requested layout had 130 at 9.3° against
 // the joined layout's 131 at 6.8°, and the first one's fit folded.
 bool better_cage(const QuadStats& a, const QuadStats& b) {
-  const bool meets_a = meets_targets(a), meets_b = meets_targets(b);
+  return better_cage(a, meets_targets(a), b, meets_targets(b));
+}
+bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b) {
   if (meets_a != meets_b) return meets_a;
   if ((a.collapsed_quads > 0) != (b.collapsed_quads > 0)) return a.collapsed_quads == 0;
   if (meets_a && a.irregular_off_singularities != b.irregular_off_singularities)
@@ -693,7 +715,10 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   int best = -1;
   QuadCage best_cage;
   QuadStats best_stats;
-  std::optional<QuadStats> requested_stats;  // the requested layout's cage, if it was valid
+  bool best_meets = false, best_squaring_tried = false;
+  std::optional<Squared> best_squared;
+  // The requested layout's cage, if it was valid (as judged: its angles after squaring).
+  std::optional<QuadStats> requested_stats;
   quad_detail::Messages best_messages;
   // Once a cage meets the targets, more choices are tried only within a work budget:
   // choices × the (refined) component's triangles (QuadOptions::work_after_meeting),
@@ -728,6 +753,21 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     quad_detail::Messages messages;
     std::exception_ptr error;
     AttemptWork work;
+    // A cage that meets the targets but for its corner angles is squared before it is
+    // judged (the targets are the output cage's, and squaring makes it): the copy, if it
+    // came closer to 90°. Choices are still compared on the angles before squaring.
+    std::optional<Squared> squared;
+    bool squaring_tried = false;
+    bool needs_squaring() const {
+      QuadStats square = stats;
+      square.mean_angle_deviation_deg = 0;
+      return !error && !meets_targets(stats) && meets_targets(square);
+    }
+    QuadStats judged() const {  // what the targets are checked on
+      QuadStats judged = stats;
+      if (squared) judged.mean_angle_deviation_deg = squared->mean_deg;
+      return judged;
+    }
   };
   auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
                      const quad_detail::Dropped& dropped) {
@@ -770,7 +810,12 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         quad_detail::release_quantize_thread();
       });
     attempt(k, seen_before, &attempts[0], quad_detail::Dropped());
-    for (size_t i = 0; i < batch && !stop; ++i, ++k) {
+    // The batch's first cage needs squaring before it is judged, and would end the search
+    // if it then meets the targets (no choice is tried after meeting): the others are
+    // dropped and it is squared on every thread. If it still misses, the next batch
+    // starts right after it (the dropped choices run again).
+    size_t taken = batch;
+    for (size_t i = 0; i < taken && !stop; ++i, ++k) {
       if (i > 0 && ((first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) ||
                     out_of_work(k))) {
         stop = true;
@@ -810,18 +855,36 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         continue;
       }
       tried_after_meeting += first_meeting >= 0;
-      if (k == 0) requested_stats = a.stats;
+      if (a.needs_squaring()) {
+        int squaring_threads = i + 1 == batch ? threads : 1;  // the batch's others still run
+        if (i == 0 && batch > 1 && first_meeting < 0 && choices_after_meeting == 0) {
+          drop = true;
+          for (auto& worker : workers) worker.join();
+          taken = 1;
+          squaring_threads = threads;
+        }
+        a.squared = square_copy(checks, variants[k].options.density, squaring_threads, a.cage,
+                                a.stats);
+        a.squaring_tried = true;
+      }
+      const QuadStats judged = a.judged();
+      const bool meets = meets_targets(judged);
+      if (k == 0) requested_stats = judged;
       // Collapsed quads mean the layout itself was broken there: such a cage ranks below
       // every collapse-free one (better_cage), but a valid field-aligned cage still beats the
       // fallback (the genus-64 net's: 97.6% valence 4 at 13.9°, against the fallback's 85%).
-      if (best < 0 || quad_detail::better_cage(a.stats, best_stats)) {
+      if (best < 0 || quad_detail::better_cage(a.stats, meets, best_stats, best_meets)) {
         best = static_cast<int>(k);
         best_cage = std::move(a.cage);
         best_stats = a.stats;
+        best_meets = meets;
+        best_squared = std::move(a.squared);
+        best_squaring_tried = a.squaring_tried;
         best_messages = std::move(a.messages);
       }
-      if (comfortably_meets_targets(best_stats) && !best_stats.collapsed_quads) stop = true;
-      if (first_meeting < 0 && meets_targets(a.stats)) first_meeting = static_cast<int>(k);
+      if (comfortably_meets_targets(judged) && !judged.collapsed_quads && best == int(k))
+        stop = true;
+      if (first_meeting < 0 && meets) first_meeting = static_cast<int>(k);
     }
   }
   if (best >= 0) {
@@ -853,8 +916,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                            ": the cage uses the layout with " + variants[best].what + " (" + why +
                            ")");
     }
-    square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
-                &out->notes);
+    if (best_squared)
+      keep_squared(*best_squared, c, &best_cage, &best_stats, &out->notes);
+    else if (!best_squaring_tried)
+      square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
+                  &out->notes);
     if (!meets_targets(best_stats)) {
       char text[240];
       std::snprintf(text, sizeof text,

@@ -8,6 +8,10 @@
 // across a short link curve instead of converging onto it (parallel_join).
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <queue>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "quad/detail/layout.h"
 
@@ -451,6 +455,65 @@ bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int las
   // Interior spokes only: the first step must not run along the sector's own curves.
   std::vector<int> allowed(sector.spokes.begin() + 1, sector.spokes.end());
   return trace_direction(s, layout, vertex, allowed, d, snap_to_field);
+}
+
+// (quad/detail/layout.h)
+bool cut_pinch(const Surface& s, Layout& layout, const std::vector<int>& faces,
+               const std::vector<int>& from, const std::vector<int>& to) {
+  if (from.empty() || to.empty()) return false;
+  std::vector<int> patch(faces);
+  std::sort(patch.begin(), patch.end());
+  auto in_patch = [&](int f) { return f >= 0 && std::binary_search(patch.begin(), patch.end(), f); };
+  std::unordered_map<int, double> distance;
+  std::unordered_map<int, int> previous;
+  std::unordered_set<int> target(to.begin(), to.end());
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  for (int v : from) {
+    if (target.count(v)) continue;
+    distance[v] = 0, previous[v] = -1;
+    queue.push({0.0, v});
+  }
+  int end = -1;
+  while (!queue.empty() && end < 0) {
+    const auto [d, v] = queue.top();
+    queue.pop();
+    if (d > distance[v]) continue;
+    const bool start = previous[v] < 0;
+    for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(v))) {
+      const int h = oh.idx(), w = s.to(h);
+      if (layout.edge_curve[h >> 1] >= 0) continue;
+      if (!in_patch(s.face(h)) && !in_patch(s.face(h ^ 1))) continue;
+      // Through unclaimed vertices only; a claimed one ends the path if it is a target
+      // (and not the first step: a one-edge cut would enclose a one-triangle patch).
+      if (layout.claimed[w] && !(target.count(w) && !start)) continue;
+      const double dw = d + (s.point[w] - s.point[v]).norm();
+      const auto it = distance.find(w);
+      if (it != distance.end() && it->second <= dw) continue;
+      distance[w] = dw, previous[w] = v;
+      if (layout.claimed[w]) {
+        end = w;
+        break;
+      }
+      queue.push({dw, w});
+    }
+  }
+  if (end < 0) return false;
+  Curve curve;
+  for (int v = end; v >= 0; v = previous[v]) curve.vertices.push_back(v);
+  std::reverse(curve.vertices.begin(), curve.vertices.end());
+  const int n = static_cast<int>(curve.vertices.size());
+  for (int i = 0; i < n; ++i) {
+    const int a = curve.vertices[std::max(i - 1, 0)], b = curve.vertices[std::min(i + 1, n - 1)];
+    const int v = curve.vertices[i];
+    curve.direction.push_back(field_at(s, v, s.tangent(v, s.point[b] - s.point[a])));
+  }
+  const int c = static_cast<int>(layout.curves.size());
+  layout.curves.push_back(curve);
+  register_curve(s, layout, c);
+  layout.node[curve.vertices.front()] = layout.node[curve.vertices.back()] = 1;
+  ++layout.separatrices;
+  return true;
 }
 
 // Separatrix directions of a singular vertex: `valence` evenly spaced polar angles,

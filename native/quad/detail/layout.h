@@ -153,6 +153,14 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
 // leaves into the sector. Stops at the first claimed vertex (motorcycle graph).
 bool trace_from(const Surface& s, Layout& layout, int vertex, int first, int last,
                 double fraction, bool snap_to_field);
+// A cut across a pinched patch (a disk whose boundary passes a vertex twice): the shortest
+// path along mesh edges through the patch's `faces` from a vertex of `from` to one of
+// `to` (the boundary's two stretches between its visits of that vertex), through
+// unclaimed vertices only, registered as a curve with field-snapped directions. A cut from
+// the middle of an arc seldom reaches the other stretch: it peels a piece off the patch,
+// and the pinch stays. False (nothing registered) if there is no such path.
+bool cut_pinch(const Surface& s, Layout& layout, const std::vector<int>& faces,
+               const std::vector<int>& from, const std::vector<int>& to);
 // Separatrices of every interior singularity and concave boundary corner.
 void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& options,
                         Messages& messages);
@@ -187,6 +195,7 @@ struct PatchLayout {
   int recornered = 0;
   int cusps = 0;  // patches with a cusp corner (an empty side), collapsed by quantization
   int removed_stretches = 0;
+  int pinches_cut = 0;  // pinched disks cut between their two stretches (cut_pinch)
   // Of quantize's integer programs: the last one's cost, and the branch-and-bound nodes
   // of all it solved (each counts at least its root).
   double quantize_cost = 0;
@@ -388,6 +397,8 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
 // vertices unless the counts are within 5% of each other, then the smaller mean corner
 // deviation (quad.cpp).
 bool better_cage(const QuadStats& a, const QuadStats& b);
+// The same with whether each meets the targets given (judged on its squared angles).
+bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b);
 
 // The angle at `at` between the edges to a and b, in radians (measure_cage, the untangle,
 // the squaring).
