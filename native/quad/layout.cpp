@@ -601,12 +601,18 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       const std::vector<int>& faces = patches_in_order[p]->faces;
       const long chi = patches_in_order[p]->chi;
       std::vector<Cycle>& cycles = patches_in_order[p]->cycles;
-      // An override read where the layout was different (the halfedge a corner then) never
-      // hides a dangling end.
+      // Once the rounds stall (half of fix_rounds_without_progress without fewer patches
+      // to fix), an override read where the layout was different (the halfedge a corner
+      // then) no longer hides a dangling end: on the 5 x 5 net such an end left one pinched
+      // strip that the cuts never resolved. Before that the overrides stand (honouring
+      // dangling ends from the start gave the 6 x 6 net's CLI cage 191 irregular vertices
+      // away from singularities instead of 158).
+      const int stall = options.fix_rounds_without_progress;
+      const bool stalled = round - fewest_round >= std::max(1, (stall > 0 ? stall : 24) / 2);
       for (Cycle& c : cycles)
         for (Corner& k : c.nodes) {
           auto o = quarter_override.find(k.halfedge_out);
-          k.quarters = o != quarter_override.end() && k.read != 4 ? o->second : k.read;
+          k.quarters = o != quarter_override.end() && !(stalled && k.read == 4) ? o->second : k.read;
         }
       bool repeated = false;
       if (cycles.size() == 1) {

@@ -117,14 +117,13 @@ struct QuadOptions {
   // A patch that is not a disk is cut from the points of its boundary farthest from any
   // node, at most this many from one stretch between nodes (24 in all): the middle of one
   // long arc can lie where the patch is a strip one triangle wide, where no cut traces.
-  // With no limit (0, earlier versions) the requested layouts of the 5 x 5 and 6 x 6 nets
-  // made no progress or cycled; with 3 they converge (docs/quad_method.md).
+  // With no limit (0, earlier versions) the CLI 6 x 6 net's requested layout cycled
+  // (round 33 gave back round 31's layout); with 3 it converges (docs/quad_method.md).
   int middle_cuts_per_stretch = 3;
   // A pinched patch (a disk whose boundary passes one vertex twice, e.g. round an island
   // of curves that touches its outer boundary at one vertex) is first cut by the shortest
   // path between its boundary's two stretches either side of that vertex (cut_pinch):
-  // cuts from the middle of an arc only peel pieces off it (the 5 x 5 net's requested
-  // layout: 24 rounds without progress on one such patch). false: not.
+  // cuts from the middle of an arc only peel pieces off it. false: not.
   bool cut_pinches = true;
   // Rounds of merging patches whose sides cannot balance, before quantization gives up.
   int max_balance_rounds = 8;

@@ -53,11 +53,22 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
     if (corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < min_corner_degrees)
       return true;
   }
-  if (normals.flipped(c)) return true;
+  // measure_cage's test (DesignNormals::flipped); where the design's normal there agrees
+  // within 45° the face under the centroid is not looked up: on a region smooth at the
+  // scale of a quad it agrees too (the lookup was half the closest-point queries of the
+  // evening out, the untangle and the squaring; the 6 x 6 net's cage is the same without).
+  const Vec3 centroid = 0.25 * (c[0] + c[1] + c[2] + c[3]);
+  const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
+  const Vec3 design = normals.nearest_normal(centroid);
+  if (design.squaredNorm() > 0) {
+    const double agreement = across.dot(design);
+    if (agreement <= 0) return true;
+    if (agreement >= std::sqrt(0.5) * across.norm() * design.norm()) return false;
+  }
   Vec3 normal;
   int near = -1;
-  locator.closest(0.25 * (c[0] + c[1] + c[2] + c[3]), &normal, hint ? hint : &near);
-  return (c[2] - c[0]).cross(c[3] - c[1]).dot(normal) <= 0;
+  locator.closest(centroid, &normal, hint ? hint : &near);
+  return across.dot(normal) <= 0;
 }
 
 // The smoothing repair; returns the vertices it moved and leaves the best cage it saw.
