@@ -1382,7 +1382,7 @@ TEST(Quad, ExtraCutsConvergeOrStopEarly) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 5)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   struct Said {
-    std::string diagnostics, notes;
+    std::string diagnostics;
     bool fallback = true;
   };
   auto requested = [&](const QuadOptions& changed) {
@@ -1397,7 +1397,6 @@ TEST(Quad, ExtraCutsConvergeOrStopEarly) {
       said.fallback = result.stats[0].fallback;
     }
     for (const auto& d : result.diagnostics) said.diagnostics += d + "\n";
-    for (const auto& d : result.notes) said.notes += d + "\n";
     return said;
   };
   const QuadOptions defaults;
