@@ -56,7 +56,8 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
   // measure_cage's test (DesignNormals::flipped); where the design's normal there agrees
   // within 45° the face under the centroid is not looked up: on a region smooth at the
   // scale of a quad it agrees too (the lookup was half the closest-point queries of the
-  // evening out, the untangle and the squaring; the 6 x 6 net's cage is the same without).
+  // evening out, the untangle and the squaring; the fixtures' cages are the same, the CLI
+  // 6 x 6 net's 19403 -> 19404 quads, 447 -> 444 irregular vertices).
   const Vec3 centroid = 0.25 * (c[0] + c[1] + c[2] + c[3]);
   const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
   const Vec3 design = normals.nearest_normal(centroid);
