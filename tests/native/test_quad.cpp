@@ -966,6 +966,56 @@ TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   EXPECT_EQ(link_inside_a_side, 1);
 }
 
+// A pinched patch is cut across between the two stretches of its boundary: on a flat
+// 2 × 2 square bounded by four curves (grid of 21 × 21, h = 0.1), an island (rows 3–8,
+// columns 11–16) hangs from the top side by a diagonal bridge from (0, 8) to (3, 11). The
+// patch round it passes the bridge twice. cut_pinch from the island's vertices to the
+// outer sides' finds the shortest path through unclaimed vertices: three edges straight
+// from the island's top row to the top side, not along the claimed bridge. Inside the
+// island (no outer vertex reachable) there is no cut and nothing is registered.
+TEST(Quad, APinchedPatchIsCutBetweenItsTwoStretches) {
+  const int n = 21;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  auto vertex = [&](int i, int j) { return i * n + j; };
+  quad_detail::Layout layout = bounded_square_layout(s, n, grid_curve(n, 0, 8, 3, 11));
+  for (const auto& c : {grid_curve(n, 3, 11, 3, 16), grid_curve(n, 3, 16, 8, 16),
+                        grid_curve(n, 8, 16, 8, 11), grid_curve(n, 8, 11, 3, 11)}) {
+    layout.curves.push_back(c);
+    quad_detail::register_curve(s, layout, static_cast<int>(layout.curves.size()) - 1);
+  }
+  std::vector<int> island, outer, outside_faces, inside_faces;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const bool on_island = (i == 3 || i == 8) ? j >= 11 && j <= 16 : (j == 11 || j == 16) && i > 3 && i < 8;
+      if (on_island) island.push_back(vertex(i, j));
+      if (i == 0 || j == 0 || i == n - 1 || j == n - 1) outer.push_back(vertex(i, j));
+    }
+  for (auto f : flat.mesh.faces()) {
+    Vec3 centre = Vec3::Zero();
+    for (auto v : flat.mesh.fv_range(f)) centre += s.point[v.idx()] / 3;
+    const bool inside = centre.y() > 0.3 && centre.y() < 0.8 && centre.x() > 1.1 && centre.x() < 1.6;
+    (inside ? inside_faces : outside_faces).push_back(f.idx());
+  }
+  const size_t curves = layout.curves.size();
+  EXPECT_FALSE(quad_detail::cut_pinch(s, layout, inside_faces, island, outer));
+  EXPECT_EQ(layout.curves.size(), curves);
+
+  ASSERT_TRUE(quad_detail::cut_pinch(s, layout, outside_faces, island, outer));
+  ASSERT_EQ(layout.curves.size(), curves + 1);
+  const std::vector<int>& cut = layout.curves.back().vertices;
+  ASSERT_EQ(cut.size(), 4u);  // three edges
+  EXPECT_NE(std::find(island.begin(), island.end(), cut.front()), island.end());
+  EXPECT_NE(std::find(outer.begin(), outer.end(), cut.back()), outer.end());
+  EXPECT_EQ(cut.front() / n, 3);  // from the island's top row
+  EXPECT_EQ(cut.back() / n, 0);   // to the top side
+  EXPECT_GE(cut.front() % n, 11);
+  EXPECT_TRUE(layout.node[cut.front()] && layout.node[cut.back()]);
+  for (size_t k = 1; k + 1 < cut.size(); ++k) EXPECT_TRUE(layout.claimed[cut[k]]);
+  // Its directions are the field's (x or y here), along the cut.
+  for (const Vec3& d : layout.curves.back().direction) EXPECT_NEAR(std::abs(d.y()), 1.0, 1e-9);
+}
+
 // A wedge (a four-cornered patch whose opposite sides differ several times over) gets a
 // cut across: on a flat 4 × 4 square bounded by four curves, a diagonal curve from (0, 1)
 // to (3, 4) leaves a patch whose corners make a 4-long side face a 1-long one. With
