@@ -362,6 +362,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
   std::vector<int>& boundary_at = st.boundary_at;
   int& visit = st.visit;  // stamp of an examination
   int fewest_fixes = std::numeric_limits<int>::max(), fewest_round = 0;  // no-progress stop
+  const int stall = options.fix_rounds_without_progress;
   for (int round = 0;; ++round) {
     ++layout.patch_rounds;
     const auto [first_seen, fresh] =
@@ -593,6 +594,13 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
         patch.cycles.push_back(cycle);
       }
     }
+    // Once the rounds stall (half of fix_rounds_without_progress without fewer patches to
+    // fix), an override read where the layout was different (the halfedge a corner then)
+    // no longer hides a dangling end: on the 5 x 5 net such an end left one pinched strip
+    // that the cuts never resolved. Before that the overrides stand (honouring dangling
+    // ends from the start gave the 6 x 6 net's CLI cage 191 irregular vertices away from
+    // singularities instead of 158).
+    const bool stalled = round - fewest_round >= std::max(1, (stall > 0 ? stall : 24) / 2);
     // Every patch, in key order: validity and, if invalid, the fix this round (a patch is
     // looked at again after its corners are re-read: --p below).
     std::vector<Examined*> patches_in_order;
@@ -601,14 +609,6 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
       const std::vector<int>& faces = patches_in_order[p]->faces;
       const long chi = patches_in_order[p]->chi;
       std::vector<Cycle>& cycles = patches_in_order[p]->cycles;
-      // Once the rounds stall (half of fix_rounds_without_progress without fewer patches
-      // to fix), an override read where the layout was different (the halfedge a corner
-      // then) no longer hides a dangling end: on the 5 x 5 net such an end left one pinched
-      // strip that the cuts never resolved. Before that the overrides stand (honouring
-      // dangling ends from the start gave the 6 x 6 net's CLI cage 191 irregular vertices
-      // away from singularities instead of 158).
-      const int stall = options.fix_rounds_without_progress;
-      const bool stalled = round - fewest_round >= std::max(1, (stall > 0 ? stall : 24) / 2);
       for (Cycle& c : cycles)
         for (Corner& k : c.nodes) {
           auto o = quarter_override.find(k.halfedge_out);
@@ -825,7 +825,6 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     int required = 0;  // patches to fix, optional wedge cuts not counted
     for (const Fix& fix : fixes) required += !fix.optional;
     if (required < fewest_fixes) fewest_fixes = required, fewest_round = round;
-    const int stall = options.fix_rounds_without_progress;
     GENBREP_CHECK(stall <= 0 || round - fewest_round < stall, Code::StageFailure,
                   "quad: " + who + ": extra cuts make no progress: " + std::to_string(required) +
                       " patches are still not four-sided disks after " + std::to_string(round) +

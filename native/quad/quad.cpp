@@ -309,7 +309,7 @@ std::optional<Squared> square_copy(const quad_detail::CageChecks& checks, double
 // reported. Only the kept cage: layout choices are compared as filled and evened out,
 // where a distorted layout (a fan of rows over collapsed slivers) still shows in its
 // angles; squaring would hide that.
-void keep_squared(const Squared& squared, int c, QuadCage* cage, QuadStats* stats,
+void keep_squared(Squared&& squared, int c, QuadCage* cage, QuadStats* stats,
                   Diagnostics* notes) {
   char text[200];
   std::snprintf(text, sizeof text,
@@ -323,13 +323,13 @@ void keep_squared(const Squared& squared, int c, QuadCage* cage, QuadStats* stat
   stats->max_angle_deviation_deg = squared.max_deg;
   stats->oversized_quads = squared.oversized_quads;
   stats->seconds += squared.seconds;
-  *cage = squared.cage;
+  *cage = std::move(squared.cage);
 }
 
 void square_kept(const quad_detail::CageChecks& checks, double density, int c, int threads,
                  QuadCage* cage, QuadStats* stats, Diagnostics* notes) {
-  if (const auto squared = square_copy(checks, density, threads, *cage, *stats))
-    keep_squared(*squared, c, cage, stats, notes);
+  if (auto squared = square_copy(checks, density, threads, *cage, *stats))
+    keep_squared(std::move(*squared), c, cage, stats, notes);
 }
 
 // Whether the cage is an oriented 2-manifold whose limit surface can be built: every
@@ -917,7 +917,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                            ")");
     }
     if (best_squared)
-      keep_squared(*best_squared, c, &best_cage, &best_stats, &out->notes);
+      keep_squared(std::move(*best_squared), c, &best_cage, &best_stats, &out->notes);
     else if (!best_squaring_tried)
       square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
                   &out->notes);
