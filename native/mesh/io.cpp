@@ -3,7 +3,11 @@
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 #include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <unordered_map>
 
 #include "mesh/mesh.h"
@@ -62,6 +66,132 @@ class RecordingImporter : public OpenMesh::IO::ImporterT<PolyMesh> {
   std::unordered_map<int, int> handle_to_point_;
 };
 
+// The numbers at the start of `line` (as many as parse, at most `most`).
+std::vector<double> leading_numbers(const std::string& line, size_t most) {
+  std::vector<double> numbers;
+  const char* at = line.c_str();
+  while (numbers.size() < most) {
+    char* end = nullptr;
+    const double x = std::strtod(at, &end);
+    if (end == at) break;
+    numbers.push_back(x);
+    at = end;
+  }
+  return numbers;
+}
+
+// The vertex coordinates of a text OBJ, OFF or ASCII PLY file as doubles, in file order;
+// empty for other formats or layouts this does not follow (binary files, STL, whose
+// reader merges equal points, PLY vertex lists, OFF of other dimensions).
+std::vector<Vec3> text_coordinates(const std::string& path) {
+  std::string extension = path.substr(std::min(path.size(), path.find_last_of('.') + 1));
+  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  std::ifstream in(path);
+  std::vector<Vec3> points;
+  std::string line;
+  auto point = [&](const std::vector<double>& xyz, size_t x, size_t y, size_t z) {
+    if (std::max({x, y, z}) >= xyz.size()) return false;
+    points.emplace_back(xyz[x], xyz[y], xyz[z]);
+    return true;
+  };
+  if (extension == "obj") {
+    while (std::getline(in, line)) {
+      const size_t start = line.find_first_not_of(" \t");
+      if (start == std::string::npos || line.compare(start, 1, "v") != 0 || line.size() < start + 2 ||
+          !std::isspace(static_cast<unsigned char>(line[start + 1])))
+        continue;
+      if (!point(leading_numbers(line.substr(start + 1), 3), 0, 1, 2)) return {};
+    }
+  } else if (extension == "off") {
+    // Header (OFF, COFF, NOFF, STOFF, ...), then the counts, then one vertex per line.
+    auto next_content = [&]() {
+      while (std::getline(in, line)) {
+        const size_t hash = line.find('#');
+        if (hash != std::string::npos) line.erase(hash);
+        if (line.find_first_not_of(" \t\r") != std::string::npos) return true;
+      }
+      return false;
+    };
+    if (!next_content()) return {};
+    std::istringstream header(line);
+    std::string keyword;
+    header >> keyword;
+    if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0 ||
+        keyword.find('4') != std::string::npos || keyword.find('n') != std::string::npos)
+      return {};
+    std::string rest;
+    std::getline(header, rest);
+    if (rest.find("BINARY") != std::string::npos) return {};
+    std::vector<double> counts = leading_numbers(rest, 1);
+    if (counts.empty()) {
+      if (!next_content()) return {};
+      counts = leading_numbers(line, 1);
+    }
+    if (counts.empty() || counts[0] < 0) return {};
+    for (long v = 0; v < static_cast<long>(counts[0]); ++v)
+      if (!next_content() || !point(leading_numbers(line, 3), 0, 1, 2)) return {};
+  } else if (extension == "ply") {
+    // The header names the elements in body order; each ASCII row is one line.
+    long skip = 0, vertices = -1;
+    std::vector<std::string> properties;
+    bool ascii = false, in_vertex = false, vertex_list = false;
+    while (std::getline(in, line)) {
+      std::istringstream words(line);
+      std::string word, a, b;
+      words >> word;
+      if (word == "format") words >> a, ascii = a == "ascii";
+      if (word == "element") {
+        long count = 0;
+        words >> a >> count;
+        in_vertex = a == "vertex" && vertices < 0;
+        if (in_vertex) vertices = count;
+        else if (vertices < 0) skip += count;
+      }
+      if (word == "property" && in_vertex) {
+        words >> a;
+        if (a == "list") vertex_list = true;
+        while (words >> b) a = b;
+        properties.push_back(a);
+      }
+      if (word == "end_header") break;
+    }
+    if (!ascii || vertex_list || vertices < 0) return {};
+    auto column = [&](const char* name) {
+      return static_cast<size_t>(std::find(properties.begin(), properties.end(), name) -
+                                 properties.begin());
+    };
+    auto next_row = [&]() {
+      while (std::getline(in, line))
+        if (line.find_first_not_of(" \t\r") != std::string::npos) return true;
+      return false;
+    };
+    for (long row = 0; row < skip; ++row)
+      if (!next_row()) return {};
+    for (long v = 0; v < vertices; ++v) {
+      if (!next_row()) return {};
+      if (!point(leading_numbers(line, properties.size()), column("x"), column("y"), column("z")))
+        return {};
+    }
+  }
+  return points;
+}
+
+// OpenMesh's readers pass every coordinate on as a float, also from files that hold more
+// digits (OBJ, OFF and ASCII PLY written with %.17g, or PLY's "property double"): a
+// keep-in read from them would not be the solid the user gave. For the text formats the
+// coordinates are read again as doubles and replace OpenMesh's when there are as many
+// and each lies within one float step of OpenMesh's value; otherwise OpenMesh's stand.
+void restore_double_coordinates(const std::string& path, std::vector<Vec3>& points) {
+  const std::vector<Vec3> exact = text_coordinates(path);
+  if (exact.size() != points.size()) return;
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      const float read = static_cast<float>(points[i][k]), near = static_cast<float>(exact[i][k]);
+      if (read != near && std::nextafter(read, near) != near) return;
+    }
+  points = exact;
+}
+
 }  // namespace
 
 PolygonSoup read_polygon_file(const std::string& path) {
@@ -95,6 +225,7 @@ PolygonSoup read_polygon_file(const std::string& path) {
                     " face corners use such vertices",
                 "mesh");
   }
+  restore_double_coordinates(path, points);
   soup.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
   for (size_t i = 0; i < points.size(); ++i) soup.vertices.row(i) = points[i];
   return soup;

@@ -64,6 +64,40 @@ TEST(MeshIo, ReadsOffAndAsciiStlAndPly) {
   EXPECT_EQ(triangulate(read_polygon_file(ply), "tet").triangles.rows(), 4);
 }
 
+TEST(MeshIo, TextCoordinatesAreReadAsDoubles) {
+  // OpenMesh's readers hand coordinates on as floats; a solid written with 17 digits must
+  // come back exactly (1/3 and 0.1 are not floats). Binary STL holds floats anyway.
+  const double x = 1.0 / 3, y = 0.1, z = -1234.5678901234567;
+  char v0[128];
+  std::snprintf(v0, sizeof v0, "%.17g %.17g %.17g", x, y, z);
+  const std::string p(v0);
+  const std::string obj = write_temp("exact.obj", "# a comment\nv " + p + "\nvt 0.5 0.5\nv 1 0 0\n"
+                                                  "vn 0 0 1\nv 0 1 0\nf 1/1 2/1 3/1\n");
+  const std::string off = write_temp("exact.off", "OFF\n3 1 0\n" + p +
+                                                      "\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const std::string ply = write_temp(
+      "exact.ply",
+      "ply\nformat ascii 1.0\ncomment written by a test\nelement vertex 3\nproperty double z\n"
+      "property double x\nproperty double y\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n" +
+          [&] {
+            char row[128];
+            std::snprintf(row, sizeof row, "%.17g %.17g %.17g", z, x, y);
+            return std::string(row);
+          }() +
+          "\n0 1 0\n0 0 1\n3 0 1 2\n");
+  for (const std::string& path : {obj, off, ply}) {
+    const PolygonSoup soup = read_polygon_file(path);
+    ASSERT_EQ(soup.vertices.rows(), 3) << path;
+    EXPECT_EQ(soup.vertices(0, 0), x) << path;
+    EXPECT_EQ(soup.vertices(0, 1), y) << path;
+    EXPECT_EQ(soup.vertices(0, 2), z) << path;
+    EXPECT_EQ(soup.vertices(1, 0), 1.0) << path;
+    EXPECT_EQ(soup.vertices(2, 1), 1.0) << path;
+    EXPECT_EQ(soup.offsets.back(), 3) << path;
+  }
+}
+
 TEST(MeshIo, MissingAndUnreadableFilesThrowFileError) {
   try {
     read_polygon_file("/nonexistent/genbrep/design.obj");
