@@ -103,25 +103,58 @@ int oversized_quads(const CageChecks& checks, const QuadCage& cage, double densi
 }
 
 int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
-                                const std::vector<Vec3>& singular, double density) {
+                                const std::vector<SingularPoint>& singular, double density) {
   const CageIncidence incidence(cage);
-  int off = 0;
+  // Quarter turns each irregular vertex carries (4 − valence) and each singularity
+  // explains; nearest same-sign pairs (vertex, singularity) within reach first.
+  struct Pair { double distance; int vertex, point; };
+  std::vector<Pair> pairs;
+  std::vector<int> carries(cage.vertices.rows(), 0), left(singular.size());
+  for (size_t i = 0; i < singular.size(); ++i) left[i] = std::abs(singular[i].index);
   for (int v = 0; v < static_cast<int>(cage.vertices.rows()); ++v) {
-    const size_t quads = incidence.quads_of[v].size();
+    const int quads = static_cast<int>(incidence.quads_of[v].size());
     if (incidence.on_chain[v] || quads == 4 || quads == 0) continue;
+    carries[v] = 4 - quads;
     const Vec3 p = cage.vertices.row(v).transpose();
     const int near = checks.normals.nearest_vertex(p);
-    const double size = near >= 0 ? checks.surface.vertex_size[near] / density : 0;
-    bool close = false;
-    for (const Vec3& s : singular) close |= (s - p).norm() <= size;
-    off += !close;
+    double edges = 0;  // the vertex's mean edge length
+    for (int w : incidence.neighbours[v]) edges += (cage.vertices.row(w).transpose() - p).norm();
+    edges /= static_cast<double>(incidence.neighbours[v].size());
+    const double reach = kSingularReach *
+        std::max(edges, near >= 0 ? checks.surface.vertex_size[near] / density : 0);
+    for (size_t i = 0; i < singular.size(); ++i) {
+      const double distance = (singular[i].point - p).norm();
+      if (distance <= reach && singular[i].index * carries[v] > 0)
+        pairs.push_back({distance, v, static_cast<int>(i)});
+    }
   }
-  return off;
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return std::tie(a.distance, a.vertex, a.point) < std::tie(b.distance, b.vertex, b.point);
+  });
+  for (const Pair& pair : pairs) {
+    int& carried = carries[pair.vertex];
+    const int explained = std::min(std::abs(carried), left[pair.point]);
+    left[pair.point] -= explained;
+    carried -= carried > 0 ? explained : -explained;
+  }
+  return static_cast<int>(std::count_if(carries.begin(), carries.end(), [](int q) { return q != 0; }));
 }
 
 bool DesignNormals::flipped(const Vec3 (&c)[4]) const {
+  const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
   const Vec3 n = nearest_normal(0.25 * (c[0] + c[1] + c[2] + c[3]));
-  return n.squaredNorm() > 0 && (c[2] - c[0]).cross(c[3] - c[1]).dot(n) <= 0;
+  if (n.squaredNorm() > 0 && across.dot(n) <= 0) return true;
+  return spans_thin_part(c, across);
+}
+
+bool DesignNormals::spans_thin_part(const Vec3 (&c)[4], const Vec3& across) const {
+  const double length = across.norm();
+  if (length <= 0) return false;
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 n = nearest_normal(c[k]);
+    if (n.squaredNorm() == 0 || across.dot(n) >= kThinPartCosine * length * n.norm()) return false;
+  }
+  return true;
 }
 
 }  // namespace quad_detail
@@ -707,9 +740,10 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
     out->notes.push_back(text);
   }
-  std::vector<Vec3> singular;  // the component's field singularities (QuadStats)
+  // The component's field singularities (QuadStats).
+  std::vector<quad_detail::SingularPoint> singular;
   for (const auto& point : field.singularities)
-    if (point.component == c) singular.push_back(coarse.point[point.vertex]);
+    if (point.component == c) singular.push_back({coarse.point[point.vertex], point.index});
   std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
   int best = -1;

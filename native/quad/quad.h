@@ -182,7 +182,9 @@ struct QuadStats {
   int irregular_vertices = 0;  // interior ≠ 4 plus boundary ≠ 3
   double mean_angle_deviation_deg = 0;  // mean |corner angle − 90°| over all quad corners
   double max_angle_deviation_deg = 0;
-  int flipped_quads = 0;  // quad normal · design normal at its closest design vertex < 0
+  // Quad normal · design normal at the design vertex closest to its centre ≤ 0, or the
+  // quad spans a thin part (its normal over 75° from the design's at all four corners).
+  int flipped_quads = 0;
   int degenerate_quads = 0;  // a corner angle below 1° or a repeated corner
   int patches = 0;
   int separatrices = 0;
@@ -191,9 +193,10 @@ struct QuadStats {
   // Quads with an edge longer than 2.5× the local target edge length (quantization
   // squeezed their patch; quad_detail::oversized_quads).
   int oversized_quads = 0;
-  // Interior vertices of valence ≠ 4 farther than one local target edge from every field
-  // singularity of the component: irregular vertices the layout put where the field has
-  // none (quad_detail::irregular_off_singularities).
+  // Interior vertices of valence ≠ 4 whose quarter turns no field singularity of the same
+  // sign within two local target edges explains (each singularity explains its own index
+  // once): irregular vertices the layout put where the field has none
+  // (quad_detail::irregular_off_singularities).
   int irregular_off_singularities = 0;
   // The quads the size field asks for on the component at the density used (after any
   // raise for dense singularities): Σ area / (size_u · size_v) · density² over its faces.

@@ -63,7 +63,7 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
   const Vec3 design = normals.nearest_normal(centroid);
   if (design.squaredNorm() > 0) {
     const double agreement = across.dot(design);
-    if (agreement <= 0) return true;
+    if (agreement <= 0 || normals.spans_thin_part(c, across)) return true;
     if (agreement >= std::sqrt(0.5) * across.norm() * design.norm()) return false;
   }
   Vec3 normal;

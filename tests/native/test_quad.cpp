@@ -910,21 +910,52 @@ TEST(Quad, QuadsStretchedBeyondTheTargetSizeAreCounted) {
   EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 0.5, 2.5), 0);
 }
 
-// Irregular vertices away from the field's singularities are counted: the edge-rotated
-// cage has two valence-3 vertices at (1.7, 3) and (3.3, 3) and two valence-5 ones at (2, 2)
-// and (3, 4); with target size 1, a singular point at (3, 4) covers the valence-5 vertex
-// there only; at density 0.5 (target 2) it also covers both valence-3 vertices, but not
-// (2, 2), 2.24 away.
+// A quad cut across a strut faces against the design although the design vertex nearest
+// its centre agrees with it: a 2 × 0.4 × 0.4 box, a quad at z = 0.3 from the side y = 0 to
+// the side y = 0.4 (its normal +z, the design's −y and +y at its corners, +z on the top
+// face 0.1 above its centre). A quad on the top face is not.
+TEST(Quad, AQuadAcrossAStrutFacesAgainstTheDesign) {
+  const quad_detail::DesignNormals normals(to_trimesh(box_mesh(Vec3(0, 0, 0), Vec3(2, 0.4, 0.4), 8)));
+  auto normal_at = [&](const Vec3& p) { return normals.nearest_normal(p).normalized(); };
+  ASSERT_GT(normal_at(Vec3(1, 0.2, 0.3)).z(), 0.99);  // the centre's nearest vertex: top face
+  const Vec3 across[4] = {Vec3(0.8, 0, 0.3), Vec3(1.2, 0, 0.3), Vec3(1.2, 0.4, 0.3), Vec3(0.8, 0.4, 0.3)};
+  EXPECT_TRUE(normals.flipped(across));
+  const Vec3 top[4] = {Vec3(0.8, 0.1, 0.4), Vec3(1.2, 0.1, 0.4), Vec3(1.2, 0.3, 0.4), Vec3(0.8, 0.3, 0.4)};
+  EXPECT_FALSE(normals.flipped(top));
+  // Round a corner of the strut (a quad from the side y = 0 over the edge onto the top
+  // face, at 45°): not thin.
+  const Vec3 corner[4] = {Vec3(0.8, 0, 0.3), Vec3(1.2, 0, 0.3), Vec3(1.2, 0.1, 0.4), Vec3(0.8, 0.1, 0.4)};
+  EXPECT_FALSE(normals.flipped(corner));
+}
+
+// Irregular vertices that no singularity explains are counted. The edge-rotated cage has
+// two valence-3 vertices at (1.7, 3) and (3.3, 3) and two valence-5 ones at (2, 2) and
+// (3, 4); target size 1, so singularities explain vertices within 2.
 TEST(Quad, IrregularVerticesAwayFromSingularitiesAreCounted) {
   const FlatGrid flat(31, 0.2);  // the square [0, 6]², target size 1
   const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
   const quad_detail::CageChecks checks(s);
-  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, regular_flat_cage(7), {}, 1.0), 0);
+  auto off = [&](const QuadCage& cage, const std::vector<quad_detail::SingularPoint>& singular,
+                 double density) {
+    return quad_detail::irregular_off_singularities(checks, cage, singular, density);
+  };
+  EXPECT_EQ(off(regular_flat_cage(7), {}, 1.0), 0);
   const QuadCage rotated = edge_rotated_flat_cage();
-  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, rotated, {}, 1.0), 4);
-  const std::vector<Vec3> singular = {Vec3(3, 4, 0)};
-  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, rotated, singular, 1.0), 3);
-  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, rotated, singular, 0.5), 1);
+  EXPECT_EQ(off(rotated, {}, 1.0), 4);
+  // A −1 singularity at (3, 4) explains the valence-5 vertex there, not the valence-3 ones
+  // beside it (other sign), nor (2, 2), 2.24 away.
+  EXPECT_EQ(off(rotated, {{Vec3(3, 4, 0), -1}}, 1.0), 3);
+  // At density 0.5 (target 2) (2, 2) is within reach, but the singularity's one quarter
+  // turn is taken by the nearer vertex.
+  EXPECT_EQ(off(rotated, {{Vec3(3, 4, 0), -1}}, 0.5), 3);
+  EXPECT_EQ(off(rotated, {{Vec3(3, 4, 0), -2}}, 0.5), 2);
+  // A +1 singularity between the valence-3 vertices explains one of them, a +2 both.
+  EXPECT_EQ(off(rotated, {{Vec3(3, 4, 0), -1}, {Vec3(2.5, 3, 0), 1}}, 1.0), 2);
+  EXPECT_EQ(off(rotated, {{Vec3(3, 4, 0), -1}, {Vec3(2.5, 3, 0), 2}}, 1.0), 1);
+  // A +1 singularity 1.5 below (2, 2) does not explain the valence-5 vertex there; a −1
+  // one does.
+  EXPECT_EQ(off(rotated, {{Vec3(2, 0.5, 0), 1}}, 1.0), 4);
+  EXPECT_EQ(off(rotated, {{Vec3(2, 0.5, 0), -1}}, 1.0), 3);
 }
 
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four

@@ -266,12 +266,24 @@ class ComponentLocator {
 // normal (cross product of its diagonals) against the area-weighted vertex normal of the
 // design vertex nearest its centroid (a uniform grid over the design's box, 64 cells along
 // its longest side, vertices bucketed per cell; locate in O(1) cells).
+// A quad whose normal is more than 75° from the design's at every corner spans a thin
+// part (DesignNormals::spans_thin_part); a quad wrapping a third of a round strut is at
+// 60°.
+constexpr double kThinPartCosine = 0.26;
+
 class DesignNormals {
  public:
   explicit DesignNormals(const TriMesh& design);
   int nearest_vertex(const Vec3& p) const;   // -1 if the design has no vertex
   Vec3 nearest_normal(const Vec3& p) const;  // zero if the design has no vertex
+  // Whether a quad faces against the design: its normal ((c2 − c0) × (c3 − c1)) against
+  // the design's at the vertex nearest its centre, or it spans a thin part.
   bool flipped(const Vec3 (&corner)[4]) const;
+  // Whether the design turns away from the quad at all four corners (its normal there
+  // more than acos(kThinPartCosine) from the quad's, `across` unnormalized): a quad cut
+  // across a strut, its corners on opposite sides (seen on a genus-9 net, h 0.1: corners on
+  // faces facing ±x, the quad facing −z, its centre 0.19 from the design).
+  bool spans_thin_part(const Vec3 (&corner)[4], const Vec3& across) const;
 
  private:
   std::vector<Vec3> point_, normal_;
@@ -320,11 +332,26 @@ struct CageChecks {
 // (quad.cpp).
 int oversized_quads(const CageChecks& checks, const QuadCage& cage, double density,
                     double factor);
-// Interior vertices of `cage` (not on a boundary chain) of valence ≠ 4 farther than one
-// local target edge (the design's size at the nearest vertex, over `density`) from every
-// point of `singular`.
+// A field singularity: where, and its index in quarter turns (−1: five quads meet there).
+struct SingularPoint {
+  Vec3 point;
+  int index;
+};
+// How far a singularity explains an irregular vertex, in edges (the vertex's own mean
+// edge or the local target edge, the longer): a traced singular node can end up about one
+// edge off after the evening out and the merges of quantization (lattice: valence-5
+// vertices 1.0–1.6 target edges from their −1 singularity; merged ones, valence 6 and 7,
+// up to 2.2 target edges where the cage is twice as coarse as the target).
+constexpr double kSingularReach = 2.0;
+// Interior vertices of `cage` (not on a boundary chain) of valence ≠ 4 whose quarter turns
+// (4 − valence) are not all explained by singularities of `singular` of the same sign
+// within kSingularReach edges (the vertex's mean edge, or the local target edge — the
+// design's size at the nearest vertex over `density` — if longer). Each singularity
+// explains at most |index| quarter turns, nearest
+// vertex–singularity pairs first; a valence-3 vertex beside a −1 singularity, or a second
+// valence-5 vertex beside one, is not explained. O(irregular × singular).
 int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
-                                const std::vector<Vec3>& singular, double density);
+                                const std::vector<SingularPoint>& singular, double density);
 
 // measure_cage (quad.h) with the design's normals already built.
 QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
