@@ -532,6 +532,18 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
       if (quads_of[b].size() < (fixed[b] ? 3u : least) || quads_of[d].size() < (fixed[d] ? 3u : least))
         continue;
       if (shared) continue;
+      // The link condition: a and c share no edge neighbour but b and d (after this
+      // batch's earlier merges), or two edges would become one, held twice the same way
+      // (the 8 x 8 net's second choice failed so after its 13 s).
+      auto now = [&](int v) { return edit.merged_into[v] >= 0 ? edit.merged_into[v] : v; };
+      std::set<int> around_a;
+      for (int x : edit.incidence.neighbours[a]) around_a.insert(now(x));
+      bool linked = false;
+      for (int x : edit.incidence.neighbours[c]) {
+        const int y = now(x);
+        linked |= y != now(b) && y != now(d) && y != a && around_a.count(y) > 0;
+      }
+      if (linked) continue;
       // Into a chain vertex only if the interior end touches no other chain vertex (the
       // merged vertex would join two boundary fans).
       if (fixed[a] || fixed[c]) {

@@ -782,6 +782,36 @@ QuadCage edge_rotated_flat_cage() {
   return rotated;
 }
 
+// A diagonal whose ends share an edge neighbour besides the quad's other two corners is
+// not collapsed (the two edges to it would become one, held twice the same way). Five
+// quads of a disk: q = (a, b, c, d), (c, b, y, u), (y, b, a, u), (d, c, s, t), (a, d, t, w);
+// a and c both border u. b and d keep 3 quads, so with doublets allowed only the link
+// stops a–c; b–d, whose ends share only a and c, collapses.
+TEST(Quad, ADiagonalWhoseEndsShareANeighbourIsNotCollapsed) {
+  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  enum { a, b, c, d, y, u, s_, t, w };
+  QuadCage cage;
+  cage.vertices.resize(9, 3);
+  cage.vertices << 2, 3, 0, 3, 3, 0, 3, 4, 0, 2, 4, 0, 4, 3, 0, 4, 2, 0, 3, 5, 0, 1, 5, 0, 1, 3, 0;
+  cage.quads.resize(5, 4);
+  cage.quads << a, b, c, d, c, b, y, u, y, b, a, u, d, c, s_, t, a, d, t, w;
+  const quad_detail::CageIncidence incidence(cage);
+  ASSERT_EQ(incidence.neighbours[a].count(u), 1u);
+  ASSERT_EQ(incidence.neighbours[c].count(u), 1u);
+  QuadCage across = cage;
+  EXPECT_EQ(quad_detail::collapse_diagonals(checks.locator, across, {0}, {0}, nullptr, true), 0);
+  EXPECT_EQ(across.quads.rows(), 5);
+  QuadCage other = cage;
+  EXPECT_EQ(quad_detail::collapse_diagonals(checks.locator, other, {0}, {1}, nullptr, true), 1);
+  EXPECT_EQ(other.quads.rows(), 4);
+  std::set<std::pair<int, int>> directed;  // every directed edge held once
+  for (int q = 0; q < other.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k)
+      EXPECT_TRUE(directed.insert({other.quads(q, k), other.quads(q, (k + 1) % 4)}).second);
+}
+
 TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
   const FlatGrid flat(31, 0.2);  // the square [0, 6]²
   const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);

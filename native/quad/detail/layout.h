@@ -31,9 +31,10 @@ class Dropped {
   explicit Dropped(const std::atomic<bool>* flag) : flag_(flag) {}
   // Throws Error{StageFailure} once the attempt is dropped.
   void check() const {
-    GENBREP_CHECK(!flag_ || !flag_->load(std::memory_order_relaxed), Code::StageFailure,
+    GENBREP_CHECK(!stopped(), Code::StageFailure,
                   "quad: a layout choice dropped (the search stopped before it)");
   }
+  bool stopped() const { return flag_ && flag_->load(std::memory_order_relaxed); }
 
  private:
   const std::atomic<bool>* flag_ = nullptr;
