@@ -287,8 +287,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
         cage_is_manifold(cancelled, &why)) {
       messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
                              std::to_string(pairs) +
-                             " diagonal collapses or edge rotations cancelled irregular "
-                             "vertices in pairs (" + std::to_string(stats.irregular_vertices) + " → " +
+                             " diagonal collapses, edge rotations or vertex splits cancelled "
+                             "irregular vertices in pairs (" + std::to_string(stats.irregular_vertices) + " → " +
                              std::to_string(cancelled_stats.irregular_vertices) + ")");
       const int folded = stats.collapsed_quads;
       *cage = std::move(cancelled);

@@ -720,6 +720,93 @@ int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage) {
   return done;
 }
 
+int split_vertices_for_pairs(const CageChecks& checks, QuadCage& cage) {
+  const CageIncidence incidence(cage);
+  const auto& fixed = incidence.on_chain;
+  const int nv = static_cast<int>(cage.vertices.rows());
+  auto valence = [&](int v) { return static_cast<int>(incidence.quads_of[v].size()); };
+  auto irregular = [&](int v, int change) { return valence(v) + change != 4; };
+  // Quad q's corner after and before v.
+  auto next_of = [&](int q, int v) {
+    int k = 0;
+    while (cage.quads(q, k) != v) ++k;
+    return std::pair<int, int>{cage.quads(q, (k + 1) % 4), cage.quads(q, (k + 3) % 4)};
+  };
+  struct Split { int gain, u, i; std::array<int, 6> fan; std::array<int, 6> ring; };
+  std::vector<Split> splits;
+  for (int u = 0; u < nv; ++u) {
+    if (fixed[u] || valence(u) != 6) continue;
+    // The six quads round u in order: quad j spans ring[j] (after u) to ring[j + 1].
+    std::array<int, 6> fan{}, ring{};
+    fan[0] = incidence.quads_of[u][0];
+    bool closed = true;
+    for (int j = 0; j < 6 && closed; ++j) {
+      const auto [after, before] = next_of(fan[j], u);
+      ring[j] = after;
+      if (j == 5) {
+        closed = before == ring[0];
+        break;
+      }
+      int next = -1;
+      for (int q : incidence.quads_of[u])
+        if (next_of(q, u).first == before) next = q;
+      closed = next >= 0;
+      if (closed) fan[j + 1] = next;
+    }
+    if (!closed || std::set<int>(ring.begin(), ring.end()).size() != 6) continue;
+    for (int i = 0; i < 3; ++i) {
+      const int p = ring[i], q = ring[i + 3];
+      if (fixed[p] || fixed[q] || incidence.neighbours[p].count(q)) continue;
+      const int gain = 1 + irregular(p, 0) + irregular(q, 0) - irregular(p, 1) - irregular(q, 1);
+      if (gain > 0) splits.push_back({gain, u, i, fan, ring});
+    }
+  }
+  std::stable_sort(splits.begin(), splits.end(),
+                   [](const Split& a, const Split& b) { return a.gain > b.gain; });
+  std::vector<char> touched(nv, 0);
+  int done = 0;
+  for (const Split& split : splits) {
+    const int u = split.u, i = split.i, p = split.ring[i], q = split.ring[i + 3];
+    bool free = !touched[u];
+    for (int j = 0; j < 6; ++j) free &= !touched[split.ring[j]];
+    if (!free) continue;
+    // u keeps quads i .. i + 2; the new vertex w takes the other three; the new quad
+    // (p, u, q, w) fills the gap. Each moves a third of the way towards its side.
+    const Vec3 at = cage.vertices.row(u).transpose();
+    Vec3 side[2] = {Vec3::Zero(), Vec3::Zero()};
+    for (int j = 0; j < 6; ++j)
+      for (int k = 0; k < 4; ++k)
+        side[j >= i && j < i + 3 ? 0 : 1] += cage.vertices.row(cage.quads(split.fan[j], k)).transpose() / 12.0;
+    const Vertices old_vertices = cage.vertices;
+    const Quads old_quads = cage.quads;
+    const int w = static_cast<int>(cage.vertices.rows());
+    cage.vertices.conservativeResize(w + 1, 3);
+    Vec3 normal;
+    cage.vertices.row(u) = checks.locator.closest(at + (side[0] - at) / 3, &normal).transpose();
+    cage.vertices.row(w) = checks.locator.closest(at + (side[1] - at) / 3, &normal).transpose();
+    for (int j = 0; j < 6; ++j)
+      if (!(j >= i && j < i + 3))
+        for (int k = 0; k < 4; ++k)
+          if (cage.quads(split.fan[j], k) == u) cage.quads(split.fan[j], k) = w;
+    const int added = static_cast<int>(cage.quads.rows());
+    cage.quads.conservativeResize(added + 1, 4);
+    cage.quads.row(added) << p, u, q, w;
+    bool bad = quad_is_bad(checks.locator, checks.normals, cage, added, kMinCornerDegrees);
+    for (int j = 0; j < 6 && !bad; ++j)
+      bad = quad_is_bad(checks.locator, checks.normals, cage, split.fan[j], kMinCornerDegrees);
+    if (bad) {
+      cage.vertices = old_vertices;
+      cage.quads = old_quads;
+      continue;
+    }
+    touched[u] = 1;
+    for (int v : split.ring) touched[v] = 1;
+    touched.push_back(1);
+    ++done;
+  }
+  return done;
+}
+
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
                            const Dropped& dropped) {
   int total = 0;
@@ -727,6 +814,12 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
     dropped.check();
     int now = cancel_pairs_once(checks, cage, 4);
     if (!now) now = rotate_edges_for_pairs(checks, cage);
+    if (!now) break;
+    total += now;
+  }
+  // Splits move no other vertex and need no smoothing: after the rounds, until none helps.
+  for (int round = 0; round < max_rounds; ++round) {
+    const int now = split_vertices_for_pairs(checks, cage);
     if (!now) break;
     total += now;
   }

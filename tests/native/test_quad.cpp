@@ -782,6 +782,31 @@ QuadCage edge_rotated_flat_cage() {
   return rotated;
 }
 
+// A vertex of six quads beside two of three is split in two: a diagonal collapsed in a
+// regular flat grid leaves a 6 between two 3s (opposite each other round it); the split
+// gives back a regular grid with one quad and one vertex more than the collapse left.
+TEST(Quad, AVertexOfSixQuadsBesideTwoOfThreeIsSplit) {
+  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  const quad_detail::CageChecks checks(s);
+  QuadCage regular = regular_flat_cage(7);
+  EXPECT_EQ(quad_detail::split_vertices_for_pairs(checks, regular), 0);
+  QuadCage cage = regular_flat_cage(7);
+  ASSERT_EQ(quad_detail::collapse_diagonals(checks.locator, cage, {2 * 6 + 2}, {0}), 1);
+  ASSERT_EQ(interior_valences(cage), (std::map<int, int>{{3, 2}, {4, 21}, {6, 1}}));
+  const Eigen::Index quads = cage.quads.rows(), vertices = cage.vertices.rows();
+  EXPECT_EQ(quad_detail::split_vertices_for_pairs(checks, cage), 1);
+  EXPECT_EQ(interior_valences(cage), (std::map<int, int>{{4, 25}}));
+  EXPECT_EQ(cage.quads.rows(), quads + 1);
+  EXPECT_EQ(cage.vertices.rows(), vertices + 1);
+  EXPECT_EQ(bad_flat_quads(cage), 0);
+  // Through cancel_irregular_pairs, which tries it when no collapse or rotation helps.
+  QuadCage again = regular_flat_cage(7);
+  ASSERT_EQ(quad_detail::collapse_diagonals(checks.locator, again, {2 * 6 + 2}, {0}), 1);
+  EXPECT_GE(quad_detail::cancel_irregular_pairs(checks, again, 4), 1);
+  EXPECT_EQ(interior_valences(again), (std::map<int, int>{{4, 25}}));
+}
+
 // A diagonal whose ends share an edge neighbour besides the quad's other two corners is
 // not collapsed (the two edges to it would become one, held twice the same way). Five
 // quads of a disk: q = (a, b, c, d), (c, b, y, u), (y, b, a, u), (d, c, s, t), (a, d, t, w);

@@ -383,8 +383,9 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 // A collapse next to a quad that comes out squeezed or turned over (and stays so after
 // smoothing) is left out and the rest tried again, at most 4 times; then the next round
 // looks for new candidates; a round with no collapse tries edge rotations
-// (rotate_edges_for_pairs); at most `max_rounds` rounds. Returns the collapses and
-// rotations (0: the cage is unchanged).
+// (rotate_edges_for_pairs); at most `max_rounds` rounds. Then vertex splits
+// (split_vertices_for_pairs), at most `max_rounds` rounds of them. Returns the collapses,
+// rotations and splits (0: the cage is unchanged).
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
                            const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
@@ -393,6 +394,15 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
 // two sharing a quad or a changed vertex; one whose new quads come out squeezed or turned
 // over is undone. Vertices do not move. Returns the rotations made.
 int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage);
+// Splits an interior vertex u of six quads in two where that leaves fewer irregular
+// vertices: a new quad (p, u, q, w) between two opposite edge neighbours p and q, u
+// keeping the three quads on one side and a new vertex w taking the other three (both
+// then of four quads; p and q gain one: a valence-3 beside the valence-6 vertex becomes
+// regular, so a −1 singularity drawn as a 6 and a 3 becomes one 5). The inverse of a
+// diagonal collapse. u and w move a third of the way towards their sides, onto the
+// component; a split whose quads come out squeezed or turned over is undone; none
+// touches another's vertices; p, q not on chains or already joined. Returns the splits.
+int split_vertices_for_pairs(const CageChecks& checks, QuadCage& cage);
 // Evens out a valid cage: for `sweeps` sweeps every free vertex moves `step` of the way to
 // the mean of its neighbours, in its tangent plane and back onto the component; a move
 // that would make one of its quads squeezed or turned over is undone. Returns the vertices
