@@ -211,6 +211,15 @@ struct FlatGrid {
   CrossField field;
 };
 
+// A flat grid as a component, with what cage checks read on it.
+struct FlatChecks {
+  FlatChecks(int n, double spacing)
+      : flat(n, spacing), surface(flat.mesh, flat.partition, flat.field, 0), checks(surface) {}
+  FlatGrid flat;
+  quad_detail::Surface surface;
+  quad_detail::CageChecks checks;
+};
+
 // A regular m × m cage of unit quads in the xy plane, its border one chain.
 QuadCage regular_flat_cage(int m) {
   QuadCage cage;
@@ -728,9 +737,8 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
 // its valence-3 diagonal gives back a cage whose interior vertices all have valence 4; a
 // regular cage has nothing to cancel.
 TEST(Quad, IrregularPairsAreCancelledByADiagonalCollapse) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(31, 0.2);  // the square [0, 6]²
+  const quad_detail::CageChecks& checks = square.checks;
   const int m = 7;  // cage vertices per side
   const QuadCage cage = regular_flat_cage(m);
   QuadCage regular = cage;
@@ -786,9 +794,8 @@ QuadCage edge_rotated_flat_cage() {
 // regular flat grid leaves a 6 between two 3s (opposite each other round it); the split
 // gives back a regular grid with one quad and one vertex more than the collapse left.
 TEST(Quad, AVertexOfSixQuadsBesideTwoOfThreeIsSplit) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(31, 0.2);  // the square [0, 6]²
+  const quad_detail::CageChecks& checks = square.checks;
   QuadCage regular = regular_flat_cage(7);
   EXPECT_EQ(quad_detail::split_vertices_for_pairs(checks, regular), 0);
   QuadCage cage = regular_flat_cage(7);
@@ -813,9 +820,8 @@ TEST(Quad, AVertexOfSixQuadsBesideTwoOfThreeIsSplit) {
 // a and c both border u. b and d keep 3 quads, so with doublets allowed only the link
 // stops a–c; b–d, whose ends share only a and c, collapses.
 TEST(Quad, ADiagonalWhoseEndsShareANeighbourIsNotCollapsed) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(31, 0.2);  // the square [0, 6]²
+  const quad_detail::CageChecks& checks = square.checks;
   enum { a, b, c, d, y, u, s_, t, w };
   QuadCage cage;
   cage.vertices.resize(9, 3);
@@ -838,9 +844,8 @@ TEST(Quad, ADiagonalWhoseEndsShareANeighbourIsNotCollapsed) {
 }
 
 TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]²
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(31, 0.2);  // the square [0, 6]²
+  const quad_detail::CageChecks& checks = square.checks;
   QuadCage regular = regular_flat_cage(7);
   EXPECT_EQ(quad_detail::rotate_edges_for_pairs(checks, regular), 0);
   QuadCage rotated = edge_rotated_flat_cage();
@@ -863,9 +868,8 @@ TEST(Quad, IrregularPairsAreCancelledByAnEdgeRotation) {
 // evening out gives up once its attempt is dropped (a sibling layout choice made the
 // search stop), and not before.
 TEST(Quad, SquaringIsTheSameOnAnyNumberOfThreadsAndADroppedEveningOutStops) {
-  const FlatGrid flat(201, 0.2);  // the square [0, 40]², target size 1
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(201, 0.2);  // the square [0, 40]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
   const int m = 41;
   QuadCage sheared = regular_flat_cage(m);
   for (int i = 1; i + 1 < m; ++i)
@@ -903,9 +907,8 @@ TEST(Quad, SquaringIsTheSameOnAnyNumberOfThreadsAndADroppedEveningOutStops) {
 // vertices stay on the plane and no quad turns over. A regular cage does not move; the
 // edge-rotated cage's irregular vertices stay where they are.
 TEST(Quad, SquaringOpensShearedQuadsAndKeepsChainsAndIrregularVertices) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]², target size 1
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(31, 0.2);  // the square [0, 6]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
   const int m = 7;
   auto mean_deviation = [&](const QuadCage& cage) {
     return quad_detail::measure_cage(cage, checks.normals).mean_angle_deviation_deg;
@@ -954,9 +957,8 @@ TEST(Quad, SquaringOpensShearedQuadsAndKeepsChainsAndIrregularVertices) {
 // target size 1, a regular cage of unit quads has none; stretching its last column to
 // 3 units makes that column's 6 quads oversized, and at density 0.5 (target 2) none are.
 TEST(Quad, QuadsStretchedBeyondTheTargetSizeAreCounted) {
-  const FlatGrid flat(61, 0.2);  // the square [0, 12]², target size 1
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(61, 0.2);  // the square [0, 12]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
   const int m = 7;
   QuadCage cage = regular_flat_cage(m);
   EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 1.0, 2.5), 0);
@@ -987,9 +989,8 @@ TEST(Quad, AQuadAcrossAStrutFacesAgainstTheDesign) {
 // two valence-3 vertices at (1.7, 3) and (3.3, 3) and two valence-5 ones at (2, 2) and
 // (3, 4); target size 1, so singularities explain vertices within 2.
 TEST(Quad, IrregularVerticesAwayFromSingularitiesAreCounted) {
-  const FlatGrid flat(31, 0.2);  // the square [0, 6]², target size 1
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const quad_detail::CageChecks checks(s);
+  const FlatChecks square(31, 0.2);  // the square [0, 6]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
   auto off = [&](const QuadCage& cage, const std::vector<quad_detail::SingularPoint>& singular,
                  double density) {
     return quad_detail::irregular_off_singularities(checks, cage, singular, density);
