@@ -263,15 +263,16 @@ class ComponentLocator {
   std::unique_ptr<Impl> impl_;
 };
 
-// The one test for a turned-over quad, shared by measure_cage and untangle_cage: the quad's
-// normal (cross product of its diagonals) against the area-weighted vertex normal of the
-// design vertex nearest its centroid (a uniform grid over the design's box, 64 cells along
-// its longest side, vertices bucketed per cell; locate in O(1) cells).
 // A quad whose normal is more than 75° from the design's at every corner spans a thin
 // part (DesignNormals::spans_thin_part); a quad wrapping a third of a round strut is at
 // 60°.
 constexpr double kThinPartCosine = 0.26;
 
+// The one test for a turned-over quad, shared by measure_cage and untangle_cage: the quad's
+// normal (cross product of its diagonals) against the area-weighted vertex normal of the
+// design vertex nearest its centroid (a uniform grid over the design's box, 64 cells along
+// its longest side, vertices bucketed per cell; locate in O(1) cells), and the thin-part
+// test at its corners.
 class DesignNormals {
  public:
   explicit DesignNormals(const TriMesh& design);
