@@ -777,26 +777,30 @@ int split_vertices_for_pairs(const CageChecks& checks, QuadCage& cage) {
     for (int j = 0; j < 6; ++j)
       for (int k = 0; k < 4; ++k)
         side[j >= i && j < i + 3 ? 0 : 1] += cage.vertices.row(cage.quads(split.fan[j], k)).transpose() / 12.0;
-    const Vertices old_vertices = cage.vertices;
-    const Quads old_quads = cage.quads;
     const int w = static_cast<int>(cage.vertices.rows());
+    const int added = static_cast<int>(cage.quads.rows());
     cage.vertices.conservativeResize(w + 1, 3);
+    cage.quads.conservativeResize(added + 1, 4);
+    // Puts the three quads of w's side back on u (or on w).
+    auto give_side = [&](int from, int to) {
+      for (int j = 0; j < 6; ++j)
+        if (!(j >= i && j < i + 3))
+          for (int k = 0; k < 4; ++k)
+            if (cage.quads(split.fan[j], k) == from) cage.quads(split.fan[j], k) = to;
+    };
     Vec3 normal;
     cage.vertices.row(u) = checks.locator.closest(at + (side[0] - at) / 3, &normal).transpose();
     cage.vertices.row(w) = checks.locator.closest(at + (side[1] - at) / 3, &normal).transpose();
-    for (int j = 0; j < 6; ++j)
-      if (!(j >= i && j < i + 3))
-        for (int k = 0; k < 4; ++k)
-          if (cage.quads(split.fan[j], k) == u) cage.quads(split.fan[j], k) = w;
-    const int added = static_cast<int>(cage.quads.rows());
-    cage.quads.conservativeResize(added + 1, 4);
+    give_side(u, w);
     cage.quads.row(added) << p, u, q, w;
     bool bad = quad_is_bad(checks.locator, checks.normals, cage, added, kMinCornerDegrees);
     for (int j = 0; j < 6 && !bad; ++j)
       bad = quad_is_bad(checks.locator, checks.normals, cage, split.fan[j], kMinCornerDegrees);
-    if (bad) {
-      cage.vertices = old_vertices;
-      cage.quads = old_quads;
+    if (bad) {  // undone: u back where it was, w and the new quad gone
+      give_side(w, u);
+      cage.vertices.row(u) = at.transpose();
+      cage.vertices.conservativeResize(w, 3);
+      cage.quads.conservativeResize(added, 4);
       continue;
     }
     touched[u] = 1;
