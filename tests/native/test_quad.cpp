@@ -573,6 +573,37 @@ TEST(Quad, AWidePatchBetweenShortArcsKeepsARow) {
   EXPECT_EQ(layout.arcs[1].count, 0);
 }
 
+// Two thin patches between two loop arcs (0 and 4, target 5) share an interior arc (1)
+// and two short interior arcs across (2 and 3, target 0.2) that may get 0 edges: alone
+// they would, and each patch would collapse onto its loop. A patch on a loop keeps an
+// edge on every side, in one solve.
+TEST(Quad, APatchOnALoopKeepsAnEdgeOnEverySide) {
+  quad_detail::PatchLayout layout;
+  layout.arcs.resize(5);
+  for (int a : {0, 1, 4}) layout.arcs[a].target = layout.arcs[a].length = 5;
+  for (int a : {2, 3}) layout.arcs[a].target = layout.arcs[a].length = 0.2;
+  quad_detail::Patch first, second;
+  first.sides = {{{0, false}}, {{2, false}}, {{1, true}}, {{3, true}}};
+  second.sides = {{{1, false}}, {{3, false}}, {{4, true}}, {{2, true}}};
+  first.quads = second.quads = 1;
+  layout.patches = {first, second};
+  std::string failure;
+  bool relaxed = true;
+  ASSERT_TRUE(quad_detail::quantize(layout, QuadOptions{}, &failure, &relaxed)) << failure;
+  EXPECT_FALSE(relaxed);
+  EXPECT_EQ(layout.arcs[2].count, 1);
+  EXPECT_EQ(layout.arcs[3].count, 1);
+  EXPECT_EQ(layout.quantize_nodes, 1);  // one integer program, solved at its root
+  for (int a : {0, 1, 4}) EXPECT_EQ(layout.arcs[a].count, 5);
+  // Without the loops (arcs 0 and 4 also on a third patch) the short arcs vanish.
+  quad_detail::Patch third;
+  third.sides = {{{4, false}}, {}, {{0, true}}, {}};
+  layout.patches.push_back(third);
+  ASSERT_TRUE(quad_detail::quantize(layout, QuadOptions{}, &failure, &relaxed)) << failure;
+  EXPECT_EQ(layout.arcs[2].count, 0);
+  EXPECT_EQ(layout.arcs[3].count, 0);
+}
+
 // On a flat grid (field along x, target size 1, mesh edges 0.1) with a curve S along
 // y = 2 from x = 0.5 to 3 and a barrier along x = 3: a walk along +x that starts 0.2
 // from S joins S across a link of at most two edges once it is clear of its start; one
