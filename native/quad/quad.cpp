@@ -42,7 +42,19 @@ DesignNormals::DesignNormals(const TriMesh& design) {
   lo_ = Vec3::Constant(1e300);
   Vec3 hi = Vec3::Constant(-1e300);
   for (const Vec3& p : point_) lo_ = lo_.cwiseMin(p), hi = hi.cwiseMax(p);
-  cell_ = nv ? std::max((hi - lo_).maxCoeff() / 64, 1e-12) : 1.0;
+  // Cells about 1.5 mean edges wide hold 2–3 vertices where the surface passes (a 64th
+  // of the box held 5 on the 6 x 6 net, 27 cells searched per lookup), but at most
+  // 16 per vertex in all (a thin plate's box is mostly empty).
+  double edges = 0;
+  long counted = 0;
+  for (auto e : design.edges()) {
+    const auto h = design.halfedge_handle(e, 0);
+    edges += (point_[design.to_vertex_handle(h).idx()] - point_[design.from_vertex_handle(h).idx()]).norm();
+    ++counted;
+  }
+  const Vec3 box = (hi - lo_).cwiseMax(Vec3::Constant(1e-12));
+  cell_ = counted ? std::max(1.5 * edges / counted, 1e-12) : 1.0;
+  cell_ = std::max({cell_, box.maxCoeff() / 1024, std::cbrt(box.prod() / (16.0 * std::max(nv, 1)))});
   for (int a = 0; a < 3; ++a) cells_[a] = nv ? long(std::floor((hi[a] - lo_[a]) / cell_)) + 1 : 0;
   std::vector<long> cell_of(nv);
   first_.assign(cells_[0] * cells_[1] * cells_[2] + 1, 0);
@@ -68,21 +80,40 @@ Vec3 DesignNormals::nearest_normal(const Vec3& p) const {
 }
 
 int DesignNormals::nearest_vertex(const Vec3& p) const {
+  if (point_.empty()) return -1;
   const auto k = key(p);
+  const Vec3 r = (p - lo_) / cell_;  // in cells
   int best = -1;
   double best_d = 1e300;
-  for (int radius = 1; best < 0 && radius < 70 && !point_.empty(); radius *= 2)
+  auto scan = [&](long x, long y, long z) {
+    if (x < 0 || y < 0 || z < 0 || x >= cells_[0] || y >= cells_[1] || z >= cells_[2]) return;
+    const long cell = (z * cells_[1] + y) * cells_[0] + x;
+    for (int i = first_[cell]; i < first_[cell + 1]; ++i) {
+      const int v = vertex_[i];
+      const double d = (point_[v] - p).squaredNorm();
+      if (d < best_d) best_d = d, best = v;
+    }
+  };
+  // p's own cell first; then the cells around it, one only if it comes nearer p than the
+  // best so far, in cubes of doubling radius until the cube holds every point nearer than
+  // the best (or 64 cells out).
+  scan(k[0], k[1], k[2]);
+  for (long radius = 1, inner = 0;; inner = radius, radius *= 2) {
     for (long x = k[0] - radius; x <= k[0] + radius; ++x)
       for (long y = k[1] - radius; y <= k[1] + radius; ++y)
         for (long z = k[2] - radius; z <= k[2] + radius; ++z) {
-          if (x < 0 || y < 0 || z < 0 || x >= cells_[0] || y >= cells_[1] || z >= cells_[2]) continue;
-          const long cell = (z * cells_[1] + y) * cells_[0] + x;
-          for (int i = first_[cell]; i < first_[cell + 1]; ++i) {
-            const int v = vertex_[i];
-            const double d = (point_[v] - p).squaredNorm();
-            if (d < best_d) best_d = d, best = v;
+          const long at[3] = {x, y, z};
+          double gap = 0;
+          long ring = 0;
+          for (int a = 0; a < 3; ++a) {
+            const double g = std::max({0.0, double(at[a]) - r[a], r[a] - double(at[a] + 1)});
+            gap += g * g;
+            ring = std::max(ring, std::abs(at[a] - k[a]));
           }
+          if (ring > inner && gap * cell_ * cell_ < best_d) scan(x, y, z);
         }
+    if ((best >= 0 && best_d <= radius * radius * cell_ * cell_) || radius >= 64) break;
+  }
   return best;
 }
 

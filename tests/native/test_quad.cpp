@@ -1016,6 +1016,33 @@ TEST(Quad, AQuadAcrossAStrutFacesAgainstTheDesign) {
   EXPECT_FALSE(normals.flipped(corner));
 }
 
+// The design vertex nearest a point is the nearest of all, on the surface, inside and
+// off it (a long thin box: its grid has cells of its mean edge, much finer than the box).
+TEST(Quad, TheNearestDesignVertexIsTheNearestOfAll) {
+  const TriMesh design = to_trimesh(box_mesh(Vec3(0, 0, 0), Vec3(4, 0.3, 0.2), 12));
+  const quad_detail::DesignNormals normals(design);
+  auto brute = [&](const Vec3& p) {
+    double best = 1e300;
+    for (auto v : design.vertices()) {
+      const auto& q = design.point(v);
+      best = std::min(best, (Vec3(q[0], q[1], q[2]) - p).squaredNorm());
+    }
+    return best;
+  };
+  int checked = 0;
+  for (int i = 0; i < 400; ++i) {
+    // A deterministic spread from the box's middle to 3 units off it.
+    const double t = i / 400.0;
+    const Vec3 p(-1 + 6 * t, 0.15 + 3 * std::sin(37 * t) * t, 0.1 + std::cos(53 * t) * t);
+    const int v = normals.nearest_vertex(p);
+    ASSERT_GE(v, 0);
+    const auto& q = design.point(design.vertex_handle(v));
+    EXPECT_DOUBLE_EQ((Vec3(q[0], q[1], q[2]) - p).squaredNorm(), brute(p)) << p.transpose();
+    ++checked;
+  }
+  EXPECT_EQ(checked, 400);
+}
+
 // Irregular vertices that no singularity explains are counted. The edge-rotated cage has
 // two valence-3 vertices at (1.7, 3) and (3.3, 3) and two valence-5 ones at (2, 2) and
 // (3, 4); target size 1, so singularities explain vertices within 2.
