@@ -270,9 +270,9 @@ constexpr double kThinPartCosine = 0.26;
 
 // The one test for a turned-over quad, shared by measure_cage and untangle_cage: the quad's
 // normal (cross product of its diagonals) against the area-weighted vertex normal of the
-// design vertex nearest its centroid (a uniform grid over the design's box, 64 cells along
-// its longest side, vertices bucketed per cell; locate in O(1) cells), and the thin-part
-// test at its corners.
+// design vertex nearest its centroid (a uniform grid over the design's box, cells about
+// 1.5 mean edges wide, vertices bucketed per cell; the nearest found exactly in O(1) cells
+// for a point on the surface), and the thin-part test at its corners.
 class DesignNormals {
  public:
   explicit DesignNormals(const TriMesh& design);
