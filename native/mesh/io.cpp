@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 
@@ -192,6 +193,35 @@ void restore_double_coordinates(const std::string& path, std::vector<Vec3>& poin
   points = exact;
 }
 
+// A text OFF file with its '#' comments taken out, or nothing (not OFF, binary, or no
+// comment). OpenMesh's OFF reader takes a comment line for data: a tetrahedron with a
+// comment after its header came out as "face 0 has 0 corners", one after the counts as
+// coordinates that cannot be read.
+std::optional<std::string> off_without_comments(const std::string& path) {
+  std::string extension = path.substr(std::min(path.size(), path.find_last_of('.') + 1));
+  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (extension != "off") return std::nullopt;
+  std::ifstream in(path, std::ios::binary);
+  std::string header;
+  std::getline(in, header);
+  if (header.find("BINARY") != std::string::npos) return std::nullopt;
+  in.seekg(0);
+  std::string text, line;
+  bool comments = false;
+  while (std::getline(in, line)) {
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) {
+      comments = true;
+      line.erase(hash);
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    }
+    text += line;
+    text += '\n';
+  }
+  if (!comments) return std::nullopt;
+  return text;
+}
+
 }  // namespace
 
 PolygonSoup read_polygon_file(const std::string& path) {
@@ -208,7 +238,13 @@ PolygonSoup read_polygon_file(const std::string& path) {
   // reports them with counts instead.
   omerr().disable();
   omlog().disable();
-  const bool ok = OpenMesh::IO::IOManager().read(path, importer, options);
+  bool ok = false;
+  if (const auto text = off_without_comments(path)) {
+    std::istringstream stream(*text);
+    ok = OpenMesh::IO::IOManager().read(stream, "off", importer, options);
+  } else {
+    ok = OpenMesh::IO::IOManager().read(path, importer, options);
+  }
   omerr().enable();
   omlog().enable();
   if (!ok) {

@@ -98,6 +98,26 @@ TEST(MeshIo, TextCoordinatesAreReadAsDoubles) {
   }
 }
 
+// Comments in an OFF file (a line of its own after the header or the counts, or after a
+// vertex) are not data: OpenMesh's reader took them for some and read a tetrahedron as
+// "face 0 has 0 corners" or as unreadable coordinates.
+TEST(MeshIo, OffCommentsAreNotData) {
+  const std::string body = "0 0 0\n1 0 0 # the second\n0 1 0\n0 0 1\n"
+                           "3 0 2 1\n3 0 1 3\n3 1 2 3\n# last face\n3 0 3 2\n";
+  for (const std::string& text : {"OFF\n# a tetrahedron\n4 4 0\n" + body,
+                                  "OFF # with a comment\n4 4 0\n# vertices\n" + body}) {
+    const PolygonSoup soup = read_polygon_file(write_temp("commented.off", text));
+    ASSERT_EQ(soup.vertices.rows(), 4) << text;
+    ASSERT_EQ(soup.offsets.size(), 5u) << text;
+    EXPECT_EQ(soup.offsets.back(), 12) << text;
+    EXPECT_EQ(soup.vertices(1, 0), 1.0) << text;
+    EXPECT_EQ(soup.vertices(3, 2), 1.0) << text;
+    EXPECT_EQ(std::count(soup.indices.begin(), soup.indices.end(), -1), 0) << text;
+    EXPECT_EQ(soup.indices[9], 0) << text;  // the last face, after its comment: 0 3 2
+    EXPECT_EQ(soup.indices[10], 3) << text;
+  }
+}
+
 TEST(MeshIo, MissingAndUnreadableFilesThrowFileError) {
   try {
     read_polygon_file("/nonexistent/genbrep/design.obj");
