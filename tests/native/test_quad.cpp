@@ -610,9 +610,8 @@ TEST(Quad, APatchOnALoopKeepsAnEdgeOnEverySide) {
 // that starts 0.6 away (beyond the 0.3 join distance) runs on to the barrier, and so does
 // one 0.2 away when joining is off.
 // Among layout choices: meeting the targets wins, then no collapsed quad, then fewer
-// irregular vertices away from singularities (within 15% or 2 even, but none wins), then
-// fewer irregular vertices, but counts within 5% are even and the smaller corner
-// deviation wins.
+// irregular vertices away from singularities, then fewer irregular vertices, but counts
+// within 5% are even and the smaller corner deviation wins.
 TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   auto stats = [](int interior, int regular, int irregular, double degrees, int collapsed) {
     QuadStats s;
@@ -645,19 +644,6 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   EXPECT_TRUE(quad_detail::better_cage(at_singularities, dislocated));
   EXPECT_FALSE(quad_detail::better_cage(dislocated, at_singularities));
   EXPECT_TRUE(quad_detail::better_cage(at_singularities, missing));  // but meeting comes first
-  // Off counts within 15% (or 2) of each other are even, unless one is none: the 3 x 3
-  // net's requested layout (15 at 4.9°) against a sparser choice (13 at 5.2°).
-  QuadStats requested = stats(4500, 4395, 105, 4.9, 0), sparser = stats(4200, 4096, 104, 5.2, 0);
-  requested.irregular_off_singularities = 15, sparser.irregular_off_singularities = 13;
-  EXPECT_TRUE(quad_detail::better_cage(requested, sparser));
-  sparser.irregular_off_singularities = 12;  // 3 fewer: not even
-  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
-  requested.irregular_off_singularities = 1, sparser.irregular_off_singularities = 0;
-  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
-  requested.irregular_off_singularities = 65, sparser.irregular_off_singularities = 56;
-  EXPECT_TRUE(quad_detail::better_cage(requested, sparser));  // 9 of 65: even
-  sparser.irregular_off_singularities = 48;
-  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));  // 17 of 65: not
 }
 
 // A walk passing near a singular vertex heads for it only along one of its separatrix
