@@ -81,12 +81,19 @@ std::vector<double> leading_numbers(const std::string& line, size_t most) {
   return numbers;
 }
 
+// The file name's extension, lower case ("" if none).
+std::string extension_of(const std::string& path) {
+  const size_t dot = path.find_last_of('.');
+  std::string extension = dot == std::string::npos ? "" : path.substr(dot + 1);
+  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return extension;
+}
+
 // The vertex coordinates of a text OBJ, OFF or ASCII PLY file as doubles, in file order;
 // empty for other formats or layouts this does not follow (binary files, STL, whose
 // reader merges equal points, PLY vertex lists, OFF of other dimensions).
 std::vector<Vec3> text_coordinates(const std::string& path) {
-  std::string extension = path.substr(std::min(path.size(), path.find_last_of('.') + 1));
-  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const std::string extension = extension_of(path);
   std::ifstream in(path);
   std::vector<Vec3> points;
   std::string line;
@@ -198,9 +205,7 @@ void restore_double_coordinates(const std::string& path, std::vector<Vec3>& poin
 // comment after its header came out as "face 0 has 0 corners", one after the counts as
 // coordinates that cannot be read.
 std::optional<std::string> off_without_comments(const std::string& path) {
-  std::string extension = path.substr(std::min(path.size(), path.find_last_of('.') + 1));
-  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  if (extension != "off") return std::nullopt;
+  if (extension_of(path) != "off") return std::nullopt;
   std::ifstream in(path, std::ios::binary);
   std::string header;
   std::getline(in, header);

@@ -1017,7 +1017,8 @@ TEST(Quad, AQuadAcrossAStrutFacesAgainstTheDesign) {
 }
 
 // The design vertex nearest a point is the nearest of all, on the surface, inside and
-// off it (a long thin box: its grid has cells of its mean edge, much finer than the box).
+// off it (a long thin box: its grid's cells are 1.5 mean edges wide, much finer than the
+// box, so points off it are found in widening cubes).
 TEST(Quad, TheNearestDesignVertexIsTheNearestOfAll) {
   const TriMesh design = to_trimesh(box_mesh(Vec3(0, 0, 0), Vec3(4, 0.3, 0.2), 12));
   const quad_detail::DesignNormals normals(design);
@@ -1029,7 +1030,6 @@ TEST(Quad, TheNearestDesignVertexIsTheNearestOfAll) {
     }
     return best;
   };
-  int checked = 0;
   for (int i = 0; i < 400; ++i) {
     // A deterministic spread from the box's middle to 3 units off it.
     const double t = i / 400.0;
@@ -1038,9 +1038,7 @@ TEST(Quad, TheNearestDesignVertexIsTheNearestOfAll) {
     ASSERT_GE(v, 0);
     const auto& q = design.point(design.vertex_handle(v));
     EXPECT_DOUBLE_EQ((Vec3(q[0], q[1], q[2]) - p).squaredNorm(), brute(p)) << p.transpose();
-    ++checked;
   }
-  EXPECT_EQ(checked, 400);
 }
 
 // Irregular vertices that no singularity explains are counted. The edge-rotated cage has
