@@ -68,11 +68,12 @@ int main(int argc, char** argv) {
   for (size_t c = 0; c < result.quads.stats.size(); ++c) {
     const QuadStats& q = result.quads.stats[c];
     std::printf("  cage %zu: %d quads (%.2fx what the size field asks), interior valence 4 %.1f%%, "
-                "boundary valence 3 %.1f%%, mean corner deviation %.1f deg, %d irregular (%d away "
-                "from singularities)%s\n",
+                "boundary valence 3 %.1f%%, mean corner deviation %.1f deg (%d quads over 45 deg), "
+                "%d irregular (%d away from singularities)%s\n",
                 c, q.quads, q.size_field_quads > 0 ? q.quads / q.size_field_quads : 0.0,
                 100 * q.interior_valence4_fraction(), 100 * q.boundary_valence3_fraction(),
-                q.mean_angle_deviation_deg, q.irregular_vertices, q.irregular_off_singularities,
+                q.mean_angle_deviation_deg, q.skewed_quads, q.irregular_vertices,
+                q.irregular_off_singularities,
                 q.fallback ? ", FALLBACK" : "");
   }
   if (net) {  // why a net's cage is what it is, and how its solid was composed

@@ -223,6 +223,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
                    {"irregular_vertices_off_singularities", s.irregular_off_singularities},
                    {"mean_angle_deviation_degrees", s.mean_angle_deviation_deg},
                    {"max_angle_deviation_degrees", s.max_angle_deviation_deg},
+                   {"skewed_quads", s.skewed_quads},
                    {"flipped_quads", s.flipped_quads},
                    {"collapsed_quads", s.collapsed_quads},
                    {"oversized_quads", s.oversized_quads},

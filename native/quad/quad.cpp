@@ -232,17 +232,19 @@ QuadStats quad_detail::measure_cage(const QuadCage& cage, const DesignNormals& n
       c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
       for (int j = 0; j < k; ++j) repeated |= cage.quads(q, k) == cage.quads(q, j);
     }
-    bool degenerate = repeated;
+    bool degenerate = repeated, skewed = false;
     for (int k = 0; k < 4; ++k) {
       const double angle =
           quad_detail::corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi;
       degenerate |= angle < 1 || c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k];
       const double deviation = std::abs(angle - 90);
+      skewed |= deviation > kSkewedDegrees;
       angle_sum += deviation;
       stats.max_angle_deviation_deg = std::max(stats.max_angle_deviation_deg, deviation);
       ++corners;
     }
     stats.degenerate_quads += degenerate;
+    stats.skewed_quads += skewed;
     stats.flipped_quads += normals.flipped(c);
   }
   stats.mean_angle_deviation_deg = corners ? angle_sum / corners : 0;
@@ -350,7 +352,7 @@ void add_messages(const quad_detail::Messages& messages, QuadResult* out) {
 struct Squared {
   QuadCage cage;
   double mean_deg = 0, max_deg = 0;  // corner deviation after squaring
-  int oversized_quads = 0, moved = 0;
+  int skewed_quads = 0, oversized_quads = 0, moved = 0;
   double seconds = 0;
 };
 std::optional<Squared> square_copy(const quad_detail::CageChecks& checks, double density,
@@ -364,6 +366,7 @@ std::optional<Squared> square_copy(const quad_detail::CageChecks& checks, double
     return std::nullopt;
   out.mean_deg = measured.mean_angle_deviation_deg;
   out.max_deg = measured.max_angle_deviation_deg;
+  out.skewed_quads = measured.skewed_quads;
   out.oversized_quads = quad_detail::oversized_quads(checks, out.cage, density, kOversized);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -385,6 +388,7 @@ void keep_squared(Squared&& squared, int c, QuadCage* cage, QuadStats* stats,
   // Vertices moved, the topology did not: only the angles change.
   stats->mean_angle_deviation_deg = squared.mean_deg;
   stats->max_angle_deviation_deg = squared.max_deg;
+  stats->skewed_quads = squared.skewed_quads;
   stats->oversized_quads = squared.oversized_quads;
   stats->seconds += squared.seconds;
   *cage = std::move(squared.cage);

@@ -172,6 +172,9 @@ struct QuadOptions {
 };
 
 // Quality of one cage, measured on the cage itself (what report.json shows).
+// A quad with a corner more than this far from 90° is skewed (QuadStats::skewed_quads).
+constexpr double kSkewedDegrees = 45.0;
+
 struct QuadStats {
   int quads = 0;
   int vertices = 0;
@@ -182,6 +185,9 @@ struct QuadStats {
   int irregular_vertices = 0;  // interior ≠ 4 plus boundary ≠ 3
   double mean_angle_deviation_deg = 0;  // mean |corner angle − 90°| over all quad corners
   double max_angle_deviation_deg = 0;
+  // Quads with a corner more than kSkewedDegrees (45°) off square: what the mean hides (a
+  // band of rows crowded into one patch's narrow part, a crumpled junction).
+  int skewed_quads = 0;
   // Quad normal · design normal at the design vertex closest to its centre ≤ 0, or the
   // quad spans a thin part (its normal over 75° from the design's at all four corners).
   int flipped_quads = 0;

@@ -998,6 +998,23 @@ TEST(Quad, QuadsStretchedBeyondTheTargetSizeAreCounted) {
   EXPECT_EQ(quad_detail::oversized_quads(checks, cage, 0.5, 2.5), 0);
 }
 
+// Quads with a corner more than 45° off square are counted apart from the mean: a vertex
+// of a unit grid moved 0.8 along the diagonal skews its four quads (a corner 48° off
+// square in one, 76° in the others) while the mean over the cage stays under 6°.
+TEST(Quad, SkewedQuadsAreCounted) {
+  const FlatChecks square(61, 0.2);  // the square [0, 12]²
+  const int m = 7;
+  QuadCage cage = regular_flat_cage(m);
+  EXPECT_EQ(quad_detail::measure_cage(cage, square.checks.normals).skewed_quads, 0);
+  cage.vertices.row(3 * m + 3) << 3.8, 3.8, 0;
+  const QuadStats stats = quad_detail::measure_cage(cage, square.checks.normals);
+  EXPECT_EQ(stats.skewed_quads, 4);
+  EXPECT_LT(stats.mean_angle_deviation_deg, 6.0);
+  EXPECT_EQ(stats.flipped_quads, 0);
+  cage.vertices.row(3 * m + 3) << 3.2, 3.2, 0;  // at most 28° off: none
+  EXPECT_EQ(quad_detail::measure_cage(cage, square.checks.normals).skewed_quads, 0);
+}
+
 // A quad cut across a strut faces against the design although the design vertex nearest
 // its centre agrees with it: a 2 × 0.4 × 0.4 box, a quad at z = 0.3 from the side y = 0 to
 // the side y = 0.4 (its normal +z, the design's −y and +y at its corners, +z on the top
