@@ -610,7 +610,8 @@ TEST(Quad, APatchOnALoopKeepsAnEdgeOnEverySide) {
 // that starts 0.6 away (beyond the 0.3 join distance) runs on to the barrier, and so does
 // one 0.2 away when joining is off.
 // Among layout choices: meeting the targets wins, then no collapsed quad, then fewer
-// irregular vertices away from singularities, then fewer irregular vertices, but counts
+// irregular vertices away from singularities (within 15% or 2 even, but none wins), then
+// fewer skewed quads (within 20% or 5 even), then fewer irregular vertices, but counts
 // within 5% are even and the smaller corner deviation wins.
 TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   auto stats = [](int interior, int regular, int irregular, double degrees, int collapsed) {
@@ -644,6 +645,20 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   EXPECT_TRUE(quad_detail::better_cage(at_singularities, dislocated));
   EXPECT_FALSE(quad_detail::better_cage(dislocated, at_singularities));
   EXPECT_TRUE(quad_detail::better_cage(at_singularities, missing));  // but meeting comes first
+  // Off counts within 15% (or 2) are even, unless one is none; then skewed quads count
+  // (within 20% or 5 even): the 3 x 3 net's requested layout (15 off, 4.8°, 35 skewed)
+  // against a sparser choice (13 off, 5.2°, 20 skewed).
+  QuadStats requested = stats(4500, 4395, 105, 4.8, 0), sparser = stats(4200, 4096, 104, 5.2, 0);
+  requested.irregular_off_singularities = 15, sparser.irregular_off_singularities = 13;
+  requested.skewed_quads = 35, sparser.skewed_quads = 20;
+  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
+  requested.skewed_quads = 23;  // skewed even: the squarer one
+  EXPECT_TRUE(quad_detail::better_cage(requested, sparser));
+  requested.irregular_off_singularities = 17;  // 4 more off: not even
+  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
+  requested.irregular_off_singularities = 1, sparser.irregular_off_singularities = 0;
+  requested.skewed_quads = 0;  // none off wins over fewer skewed
+  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
 }
 
 // A walk passing near a singular vertex heads for it only along one of its separatrix
