@@ -28,6 +28,15 @@ double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b) {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+// The corners of quad q from the one at v on, counter-clockwise: v, the next, the
+// opposite, the previous.
+std::array<int, 4> corners_from(const QuadCage& cage, int q, int v) {
+  int k = 0;
+  while (k < 4 && cage.quads(q, k) != v) ++k;
+  return {cage.quads(q, k % 4), cage.quads(q, (k + 1) % 4), cage.quads(q, (k + 2) % 4),
+          cage.quads(q, (k + 3) % 4)};
+}
 // Corners under this are "squeezed" here; the validity bar (measure_cage) is 1°, and the
 // margin keeps a repaired quad from sitting just above it.
 constexpr double kMinCornerDegrees = 5.0;
@@ -196,18 +205,11 @@ int remove_doublets(QuadCage& cage) {
     const auto& quads_of = edit.incidence.quads_of;
     auto& touched = edit.touched;
     int now = 0;
-    // The corners of quad q from the one at v, counter-clockwise.
-    auto from = [&](int q, int v, int(&c)[4]) {
-      int k = 0;
-      while (k < 4 && cage.quads(q, k) != v) ++k;
-      for (int j = 0; j < 4; ++j) c[j] = cage.quads(q, (k + j) % 4);
-    };
     for (int v = 0; v < nv; ++v) {
       if (fixed[v] || quads_of[v].size() != 2) continue;
       const int q1 = quads_of[v][0], q2 = quads_of[v][1];
-      int a[4], b[4];
-      from(q1, v, a);  // v, b, x, a
-      from(q2, v, b);  // v, a, y, b
+      const auto a = corners_from(cage, q1, v);  // v, b, x, a
+      const auto b = corners_from(cage, q2, v);  // v, a, y, b
       if (b[1] != a[3] || b[3] != a[1] || a[2] == b[2]) continue;
       bool busy = false;
       for (int k = 0; k < 4; ++k) busy |= touched[a[k]] || touched[b[k]];
@@ -279,13 +281,6 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
   const auto& fixed = incidence.on_chain;
   const auto& quads_of = incidence.quads_of;
   auto point = [&](int v) { return Vec3(cage.vertices.row(v).transpose()); };
-  // Quad q's corners from v on: v, the next, the opposite, the previous.
-  auto from = [&](int q, int v) {
-    int k = 0;
-    while (cage.quads(q, k) != v) ++k;
-    return std::array<int, 3>{cage.quads(q, (k + 1) % 4), cage.quads(q, (k + 2) % 4),
-                              cage.quads(q, (k + 3) % 4)};
-  };
   // The rows through each free vertex of four quads: its neighbours in turn (one quad's
   // previous corner is the next quad's next), so ring[0], ring[2] and ring[1], ring[3]
   // are the rows' two sides.
@@ -295,8 +290,8 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     if (fixed[v] || quads_of[v].size() != 4) continue;
     std::array<int, 4> next_of, after;
     for (int i = 0; i < 4; ++i) {
-      const auto c = from(quads_of[v][i], v);
-      next_of[i] = c[0], after[i] = c[2];
+      const auto c = corners_from(cage, quads_of[v][i], v);
+      next_of[i] = c[1], after[i] = c[3];
     }
     int at = 0;
     bool closed = true;
@@ -319,9 +314,9 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     if (!n) continue;
     double sum = 0, squares = 0;
     for (int q : quads_of[v]) {
-      const auto c = from(q, v);
-      sum += corner_angle(point(v), point(c[0]), point(c[2]));
-      squares += (point(c[0]) - point(v)).squaredNorm();
+      const auto c = corners_from(cage, q, v);
+      sum += corner_angle(point(v), point(c[1]), point(c[3]));
+      squares += (point(c[1]) - point(v)).squaredNorm();
     }
     ideal[v] = fixed[v] ? sum / n : 2 * kPi / n;
     if (squares > 0) scale2[v] = squares / n;
@@ -347,7 +342,8 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
   auto energy = [&](int v, const Vec3& p) {
     double e = 0;
     for (int q : quads_of[v]) {
-      const auto [a, d, b] = from(q, v);
+      const auto c = corners_from(cage, q, v);
+      const int a = c[1], d = c[2], b = c[3];
       const Vec3 pa = point(a), pb = point(b), pd = point(d);
       const double at_v = corner_angle(p, pa, pb) - ideal[v];
       const double at_a = corner_angle(pa, pd, p) - ideal[a];
@@ -726,9 +722,8 @@ int split_vertices_for_pairs(const CageChecks& checks, QuadCage& cage) {
   auto irregular = [&](int v, int change) { return valence(v) + change != 4; };
   // Quad q's corner after and before v.
   auto next_of = [&](int q, int v) {
-    int k = 0;
-    while (cage.quads(q, k) != v) ++k;
-    return std::pair<int, int>{cage.quads(q, (k + 1) % 4), cage.quads(q, (k + 3) % 4)};
+    const auto c = corners_from(cage, q, v);
+    return std::pair<int, int>{c[1], c[3]};
   };
   struct Split { int gain, u, i; std::array<int, 6> fan; std::array<int, 6> ring; };
   std::vector<Split> splits;
