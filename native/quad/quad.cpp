@@ -194,7 +194,9 @@ QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
   return quad_detail::measure_cage(cage, quad_detail::DesignNormals(design));
 }
 
-QuadStats quad_detail::measure_cage(const QuadCage& cage, const DesignNormals& normals) {
+namespace {
+QuadStats measure(const QuadCage& cage, const quad_detail::DesignNormals& normals,
+                  const quad_detail::ComponentLocator* locator) {
   QuadStats stats;
   stats.quads = static_cast<int>(cage.quads.rows());
   stats.vertices = static_cast<int>(cage.vertices.rows());
@@ -245,10 +247,41 @@ QuadStats quad_detail::measure_cage(const QuadCage& cage, const DesignNormals& n
     }
     stats.degenerate_quads += degenerate;
     stats.skewed_quads += skewed;
-    stats.flipped_quads += normals.flipped(c);
+    stats.flipped_quads += locator ? quad_detail::turned_over(normals, *locator, c) : normals.flipped(c);
   }
   stats.mean_angle_deviation_deg = corners ? angle_sum / corners : 0;
   return stats;
+}
+}  // namespace
+
+bool quad_detail::faces_away(const ComponentLocator& locator, const Vec3 (&c)[4], int* hint) {
+  int none = -1;
+  const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
+  const double bound = std::cos(kStandingDegrees * kPi / 180) * across.norm();
+  for (const Vec3& normal :
+       locator.normals_at(0.25 * (c[0] + c[1] + c[2] + c[3]), hint ? hint : &none))
+    if (across.dot(normal) <= bound) return true;
+  return false;
+}
+
+bool quad_detail::turned_over(const DesignNormals& normals, const ComponentLocator& locator,
+                              const Vec3 (&c)[4], int* hint) {
+  const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
+  const Vec3 design = normals.nearest_normal(0.25 * (c[0] + c[1] + c[2] + c[3]));
+  if (design.squaredNorm() > 0) {
+    const double agreement = across.dot(design);
+    if (agreement <= 0 || normals.spans_thin_part(c, across)) return true;
+    if (agreement >= kFaceCheckCosine * across.norm() * design.norm()) return false;
+  }
+  return faces_away(locator, c, hint);
+}
+
+QuadStats quad_detail::measure_cage(const QuadCage& cage, const CageChecks& checks) {
+  return measure(cage, checks.normals, &checks.locator);
+}
+
+QuadStats quad_detail::measure_cage(const QuadCage& cage, const DesignNormals& normals) {
+  return measure(cage, normals, nullptr);
 }
 
 namespace {
@@ -291,12 +324,12 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why);
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped) {
-  QuadStats stats = quad_detail::measure_cage(*cage, checks.normals);
+  QuadStats stats = quad_detail::measure_cage(*cage, checks);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
     int collapsed = 0;
     const int moved = quad_detail::untangle_cage(checks, *cage, 24, &collapsed, dropped);
-    stats = quad_detail::measure_cage(*cage, checks.normals);
+    stats = quad_detail::measure_cage(*cage, checks);
     stats.collapsed_quads = collapsed;
     messages->warnings.push_back("component " + std::to_string(surface.component) + ": " +
                            std::to_string(bad) + " degenerate or flipped quads after filling; " +
@@ -313,7 +346,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // the cage stays valid.
   QuadCage cancelled = *cage;
   if (const int pairs = quad_detail::cancel_irregular_pairs(checks, cancelled, 4, dropped)) {
-    const QuadStats cancelled_stats = quad_detail::measure_cage(cancelled, checks.normals);
+    const QuadStats cancelled_stats = quad_detail::measure_cage(cancelled, checks);
     std::string why;
     if (!cancelled_stats.flipped_quads && !cancelled_stats.degenerate_quads &&
         cancelled_stats.irregular_vertices < stats.irregular_vertices &&
@@ -331,7 +364,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   }
   QuadCage relaxed = *cage;
   quad_detail::relax_cage(checks, relaxed, 10, 0.5, dropped);
-  QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks.normals);
+  QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks);
   if (!relaxed_stats.flipped_quads && !relaxed_stats.degenerate_quads &&
       relaxed_stats.mean_angle_deviation_deg < stats.mean_angle_deviation_deg) {
     relaxed_stats.collapsed_quads = stats.collapsed_quads;
@@ -360,7 +393,7 @@ std::optional<Squared> square_copy(const quad_detail::CageChecks& checks, double
   const auto start = std::chrono::steady_clock::now();
   Squared out{cage};
   out.moved = quad_detail::square_cage(checks, out.cage, 10, density, threads);
-  const QuadStats measured = quad_detail::measure_cage(out.cage, checks.normals);
+  const QuadStats measured = quad_detail::measure_cage(out.cage, checks);
   if (measured.flipped_quads || measured.degenerate_quads ||
       measured.mean_angle_deviation_deg >= stats.mean_angle_deviation_deg)
     return std::nullopt;

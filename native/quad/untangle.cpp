@@ -48,9 +48,9 @@ constexpr double kStretchWeight = 1.0;
 // the 5x5 net, 11.1° -> 6.8° but rows 30% less even; with it 7.9°, rows as even as filled).
 constexpr double kFairWeight = 1.0;
 
-// A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test,
-// or against the component face under its centroid. `hint`: the triangle under the
-// centroid when last looked at (ComponentLocator::closest; updated), or null.
+// A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test
+// (turned_over). `hint`: the triangle under the centroid when last looked at
+// (ComponentLocator::closest; updated), or null.
 bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
                  const QuadCage& cage, int q, double min_corner_degrees, int* hint = nullptr) {
   Vec3 c[4];
@@ -60,23 +60,7 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
     if (corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < min_corner_degrees)
       return true;
   }
-  // measure_cage's test (DesignNormals::flipped); where the design's normal there agrees
-  // within 45° the face under the centroid is not looked up: on a region smooth at the
-  // scale of a quad it agrees too (the lookup was half the closest-point queries of the
-  // evening out, the untangle and the squaring; the fixtures' cages are the same, the CLI
-  // 6 x 6 net's 19403 -> 19404 quads, 447 -> 444 irregular vertices).
-  const Vec3 centroid = 0.25 * (c[0] + c[1] + c[2] + c[3]);
-  const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
-  const Vec3 design = normals.nearest_normal(centroid);
-  if (design.squaredNorm() > 0) {
-    const double agreement = across.dot(design);
-    if (agreement <= 0 || normals.spans_thin_part(c, across)) return true;
-    if (agreement >= std::sqrt(0.5) * across.norm() * design.norm()) return false;
-  }
-  Vec3 normal;
-  int near = -1;
-  locator.closest(centroid, &normal, hint ? hint : &near);
-  return across.dot(normal) <= 0;
+  return turned_over(normals, locator, c, hint);
 }
 
 // The smoothing repair; returns the vertices it moved and leaves the best cage it saw.

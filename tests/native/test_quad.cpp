@@ -2,6 +2,8 @@
 // scenes. Validity is checked here by code independent of quad/: manifoldness and
 // orientation from the quads alone, each quad's normal against the design's nearest
 // triangle, and every boundary chain against its partition loop's polyline.
+#include <CGAL/Simple_cartesian.h>
+
 #include <algorithm>
 #include <atomic>
 #include <gtest/gtest.h>
@@ -78,8 +80,14 @@ int check_cage(const QuadCage& cage, const Partitioned& r) {
     for (int q : qs) roots.insert(find(q));
     if (roots.size() != 1) fail("vertex " + std::to_string(v) + " is non-manifold");
   }
-  // Normals: the quad's against the design triangle nearest to its centre.
+  // Normals: the quad's against the design triangle closest to its centre (CGAL's exact
+  // point-triangle distance, among the triangles whose centroid is no farther than the
+  // nearest centroid plus the largest centroid-to-corner reach; the nearest centroid alone
+  // picked a triangle round a fillet from the one under the quad).
+  using Kernel = CGAL::Simple_cartesian<double>;
   std::vector<Vec3> centroid, normal;
+  std::vector<Kernel::Triangle_3> triangle;
+  double reach = 0;
   for (auto f : r.mesh.faces()) {
     Vec3 p[3];
     int k = 0;
@@ -89,15 +97,28 @@ int check_cage(const QuadCage& cage, const Partitioned& r) {
     }
     centroid.push_back((p[0] + p[1] + p[2]) / 3);
     normal.push_back((p[1] - p[0]).cross(p[2] - p[0]).normalized());
+    triangle.emplace_back(Kernel::Point_3(p[0].x(), p[0].y(), p[0].z()),
+                          Kernel::Point_3(p[1].x(), p[1].y(), p[1].z()),
+                          Kernel::Point_3(p[2].x(), p[2].y(), p[2].z()));
+    for (const Vec3& x : p) reach = std::max(reach, (x - centroid.back()).norm());
   }
   int flipped = 0;
   for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
     Vec3 c[4];
     for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
     const Vec3 centre = (c[0] + c[1] + c[2] + c[3]) / 4;
+    std::vector<double> to_centroid(centroid.size());
+    double nearest = 1e300;
+    for (size_t f = 0; f < centroid.size(); ++f)
+      nearest = std::min(nearest, to_centroid[f] = (centroid[f] - centre).norm());
+    const Kernel::Point_3 at(centre.x(), centre.y(), centre.z());
     size_t best = 0;
-    for (size_t f = 1; f < centroid.size(); ++f)
-      if ((centroid[f] - centre).squaredNorm() < (centroid[best] - centre).squaredNorm()) best = f;
+    double closest = 1e300;
+    for (size_t f = 0; f < centroid.size(); ++f)
+      if (to_centroid[f] <= nearest + reach) {
+        const double d = CGAL::squared_distance(at, triangle[f]);
+        if (d < closest) closest = d, best = f;
+      }
     if ((c[2] - c[0]).cross(c[3] - c[1]).dot(normal[best]) <= 0) ++flipped;
   }
   if (flipped) fail(std::to_string(flipped) + " quads face against the design");
@@ -186,12 +207,14 @@ void expect_targets(const std::string& name, const QuadStats& s) {
 // A flat n × n vertex grid of spacing h in the xy plane, one organic component with no
 // loops, the field along x with target size 1.
 struct FlatGrid {
-  FlatGrid(int n, double h) {
+  // Spacing h along x, h_y (default h) along y; diagonals from (x, y) to (x + h, y + h_y).
+  FlatGrid(int n, double h, double h_y = 0) {
+    if (h_y <= 0) h_y = h;
     TriangleMesh grid;
     grid.vertices.resize(n * n, 3);
     grid.triangles.resize(2 * (n - 1) * (n - 1), 3);
     for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) grid.vertices.row(i * n + j) << j * h, i * h, 0;
+      for (int j = 0; j < n; ++j) grid.vertices.row(i * n + j) << j * h, i * h_y, 0;
     for (int i = 0, t = 0; i + 1 < n; ++i)
       for (int j = 0; j + 1 < n; ++j) {
         const int a = i * n + j;
@@ -714,6 +737,40 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
     EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[1], 1.8, 1e-9);  // straight past it
 }
 
+// On long thin triangles along the walk (spacing 0.1 along x, 0.03 across), a walk along
+// +x one row (0.03) beside a singular vertex reaches it by the shortest free path
+// (route_to): stepping to the neighbour nearest to it went straight on, one row over,
+// until the vertex lay beside and no longer ahead (the 6 x 6 net: two separatrices from
+// singularities 0.6 apart ran side by side 0.007 apart, and one patch took all its rows
+// through that strip).
+TEST(Quad, AWalkOneRowBesideASingularityReachesIt) {
+  const int n = 41;
+  const FlatGrid flat(n, 0.1, 0.03);
+  const TriMesh& mesh = flat.mesh;
+  const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
+  auto vertex = [&](int i, int j) { return i * n + j; };
+  const int singular = vertex(20, 20);  // (2, 0.6)
+  quad_detail::Layout layout = quad_detail::start_layout(s);
+  quad_detail::Curve barrier;
+  for (int i = 0; i < n; ++i) barrier.vertices.push_back(vertex(i, 30));  // x = 3
+  barrier.direction.assign(n, Vec3(0, 1, 0));
+  layout.curves.push_back(barrier);
+  quad_detail::register_curve(s, layout, 0);
+  layout.attractors = {singular};
+  layout.attractor_directions = {{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)}};
+  layout.claimed[singular] = 1;
+  const int start = vertex(21, 10);  // (1, 0.63)
+  std::vector<int> spokes;
+  for (auto oh : mesh.voh_range(mesh.vertex_handle(start))) spokes.push_back(oh.idx());
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes, Vec3(1, 0, 0), true));
+  const std::vector<int>& walked = layout.curves.back().vertices;
+  EXPECT_EQ(walked.back(), singular);
+  // Off its row only within the last target edge before the singular vertex.
+  for (int v : walked)
+    if (mesh.point(mesh.vertex_handle(v))[0] < 1.2)
+      EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[1], 0.63, 1e-9);
+}
+
 TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   const int n = 41;
   const FlatGrid flat(n, 0.1);
@@ -1046,6 +1103,51 @@ TEST(Quad, AQuadAcrossAStrutFacesAgainstTheDesign) {
   // face, at 45°): not thin.
   const Vec3 corner[4] = {Vec3(0.8, 0, 0.3), Vec3(1.2, 0, 0.3), Vec3(1.2, 0.1, 0.4), Vec3(0.8, 0.1, 0.4)};
   EXPECT_FALSE(normals.flipped(corner));
+}
+
+// measure_cage with the component also counts a quad that stands on the triangle under
+// its centre (more than 80° from its normal) or faces against it; where the point closest
+// to its centre lies on an edge or a corner (a quad over a crease), against each triangle
+// there, whichever the search meets first. On a 2 × 0.4 × 0.4 box: flat on the top face,
+// tilted 60° or bent 45° over the edge y = 0: fine; standing at 85° on the top face, or
+// turned over: not.
+TEST(Quad, AQuadStandingOnTheSurfaceUnderItIsFlipped) {
+  const TriMesh box = to_trimesh(box_mesh(Vec3(0, 0, 0), Vec3(2, 0.4, 0.4), 8));
+  Partition partition;
+  partition.face_component.assign(box.n_faces(), 0);
+  partition.organic_components = 1;
+  CrossField field;
+  field.direction = FaceVectors(static_cast<Eigen::Index>(box.n_faces()), 3);
+  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
+  field.size_u = field.size_v = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(box.n_faces()), 1.0);
+  const quad_detail::Surface surface(box, partition, field, 0);
+  const quad_detail::CageChecks checks(surface);
+  int hint = -1;
+  EXPECT_EQ(checks.locator.normals_at(Vec3(1.02, 0.21, 0.5), &hint).size(), 1u);  // over a face
+  EXPECT_EQ(checks.locator.normals_at(Vec3(1.02, -0.1, 0.5), &hint).size(), 2u);  // off an edge
+  EXPECT_GE(checks.locator.normals_at(Vec3(-0.1, -0.1, 0.5), &hint).size(), 3u);  // off a corner
+  auto quad = [](const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    QuadCage cage;
+    cage.vertices.resize(4, 3);
+    cage.vertices << a.transpose(), b.transpose(), c.transpose(), d.transpose();
+    cage.quads.resize(1, 4);
+    cage.quads << 0, 1, 2, 3;
+    return cage;
+  };
+  auto flipped = [&](const QuadCage& cage) { return quad_detail::measure_cage(cage, checks).flipped_quads; };
+  // A unit of width along x, a rise `up` over a run `run` across y, starting on the top face.
+  auto tilted = [&](double degrees) {
+    const double run = 0.1 * std::cos(degrees * M_PI / 180), up = 0.1 * std::sin(degrees * M_PI / 180);
+    return quad(Vec3(0.95, 0.15, 0.4), Vec3(1.05, 0.15, 0.4), Vec3(1.05, 0.15 + run, 0.4 + up),
+                Vec3(0.95, 0.15 + run, 0.4 + up));
+  };
+  EXPECT_EQ(flipped(tilted(0)), 0);
+  EXPECT_EQ(flipped(tilted(60)), 0);
+  EXPECT_EQ(flipped(tilted(85)), 1);
+  EXPECT_EQ(flipped(tilted(180)), 1);  // turned over
+  // Bent 45° over the edge y = 0 (from the side face onto the top face): its centre lies
+  // off the edge, by both triangles there within 45°.
+  EXPECT_EQ(flipped(quad(Vec3(0.95, 0, 0.3), Vec3(1.05, 0, 0.3), Vec3(1.05, 0.1, 0.4), Vec3(0.95, 0.1, 0.4))), 0);
 }
 
 // The design vertex nearest a point is the nearest of all, on the surface, inside and

@@ -256,6 +256,11 @@ class ComponentLocator {
   // The same, starting the search from triangle *hint (a previous answer near p; -1: none)
   // and leaving the triangle hit there: the same point, found faster.
   Vec3 closest(const Vec3& p, Vec3* normal, int* hint) const;
+  // The unit normals of the component's triangles that hold the point closest to p: its
+  // triangle's, or where that point lies on an edge or a vertex (a point off a crease)
+  // those of every component triangle there, so that the answer does not depend on which
+  // of them the search met first (the hint).
+  std::vector<Vec3> normals_at(const Vec3& p, int* hint) const;
 
  private:
   struct Impl;
@@ -357,6 +362,26 @@ int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
 
 // measure_cage (quad.h) with the design's normals already built.
 QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
+// The same with the component: a quad is flipped by turned_over, which also finds one
+// that stands on the surface under it. The stage measures with this one.
+QuadStats measure_cage(const QuadCage& cage, const CageChecks& checks);
+// Whether a quad faces against the component's triangles at the point closest to its
+// centre, or stands on them: its normal (the cross product of its diagonals) more than
+// kStandingDegrees from theirs (ComponentLocator::normals_at). *hint as in
+// ComponentLocator::closest.
+constexpr double kStandingDegrees = 80.0;
+bool faces_away(const ComponentLocator& locator, const Vec3 (&corner)[4], int* hint = nullptr);
+// The one test for a turned-over quad where the component is at hand (measure_cage with
+// the checks, and the untangling's, evening out's and squaring's quad_is_bad, so that a
+// move they allow never makes a cage the measure rejects): DesignNormals::flipped, and
+// unless the quad's normal is within acos(kFaceCheckCosine) = 30° of the nearest design
+// vertex's, faces_away. The design vertex nearest a quad's centre can lie round a fillet
+// from the surface under it: the 5 x 5 net (h 0.12, traces reaching singularities by
+// route_to) had quads at 92° and 114° to the triangle under them that agreed with that
+// vertex within 45°, the bound before. Looking up every quad costs 2.2 s on the 6 x 6 net.
+constexpr double kFaceCheckCosine = 0.866;
+bool turned_over(const DesignNormals& normals, const ComponentLocator& locator,
+                 const Vec3 (&corner)[4], int* hint = nullptr);
 
 // Opens up degenerate or turned-over quads of a filled cage: the interior cage vertices
 // within a few rings of them are smoothed and projected back onto the component, for at
