@@ -278,6 +278,30 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
       ia.push_back(r), ja.push_back(slack + k), ar.push_back(k ? -1.0 : 1.0);
     }
   }
+  // A patch on a loop keeps an edge on every side of interior arcs (solve's rows):
+  // Σ(side) + s ≥ 1, the slack priced 1, so that a layout only those rows unbalance names
+  // a patch to merge.
+  std::vector<std::pair<int, int>> loop_slack;  // (slack column, patch)
+  for (size_t p = 0; p < layout.patches.size(); ++p) {
+    const Patch& patch = layout.patches[p];
+    bool on_loop = false;
+    for (const auto& side : patch.sides)
+      for (auto& [a, reversed] : side) on_loop |= sides_of[a] == 1;
+    if (!on_loop) continue;
+    for (const auto& side : patch.sides) {
+      bool interior = !side.empty();
+      for (auto& [a, reversed] : side) interior &= sides_of[a] != 1;
+      if (!interior) continue;
+      const int r = glp_add_rows(lp, 1);
+      glp_set_row_bnds(lp, r, GLP_LO, 1, 0);
+      for (auto& [a, reversed] : side) ia.push_back(r), ja.push_back(a + 1), ar.push_back(1.0);
+      const int slack = glp_add_cols(lp, 1);
+      glp_set_col_bnds(lp, slack, GLP_LO, 0, 0);
+      glp_set_obj_coef(lp, slack, 1.0);
+      ia.push_back(r), ja.push_back(slack), ar.push_back(1.0);
+      loop_slack.push_back({slack, static_cast<int>(p)});
+    }
+  }
   glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
   glp_smcp parameters;
   glp_init_smcp(&parameters);
@@ -286,10 +310,13 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
   if (glp_simplex(lp, &parameters) != 0 || glp_get_status(lp) != GLP_OPT) return out;
   for (size_t r = 0; r < rows.size(); ++r) {
     const int slack = arcs + 2 * static_cast<int>(r) + 1;
-    if (glp_get_col_prim(lp, slack) + glp_get_col_prim(lp, slack + 1) > 1e-9 &&
-        (out.empty() || out.back() != rows[r].patch))
+    if (glp_get_col_prim(lp, slack) + glp_get_col_prim(lp, slack + 1) > 1e-9)
       out.push_back(rows[r].patch);
   }
+  for (auto& [slack, p] : loop_slack)
+    if (glp_get_col_prim(lp, slack) > 1e-9) out.push_back(p);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 

@@ -627,6 +627,31 @@ TEST(Quad, APatchOnALoopKeepsAnEdgeOnEverySide) {
   EXPECT_EQ(layout.arcs[3].count, 0);
 }
 
+// A layout whose side equalities hold only with a side of a patch on a loop at 0 edges:
+// P's sides force arc 3 to 0 (side 1 is arc 2, side 3 arcs 2 and 3), and arc 3 is a whole
+// side of Q, which lies on a loop (arcs 4 and 5); R only makes arc 7 interior. Quantization
+// fails, and unbalanced_patches names a patch to merge: the rows that keep an edge on every
+// side of a loop patch are in its program too (without them it found none, and the
+// requested layout gave up instead of merging: lattice through Blender).
+TEST(Quad, APatchUnbalancedOnlyByALoopSideIsFoundToMerge) {
+  quad_detail::PatchLayout layout;
+  layout.arcs.resize(12);
+  for (auto& arc : layout.arcs) arc.target = arc.length = 5;
+  for (int a : {2, 3, 7}) layout.arcs[a].target = layout.arcs[a].length = 1;
+  quad_detail::Patch p, q, r;
+  p.sides = {{{0, false}}, {{2, false}}, {{1, true}}, {{3, true}, {2, true}}};
+  q.sides = {{{4, false}}, {{3, false}}, {{5, true}}, {{7, true}}};
+  r.sides = {{{11, false}}, {{7, false}}, {{11, true}}, {{7, true}}};
+  p.quads = q.quads = r.quads = 25;
+  layout.patches = {p, q, r};
+  std::string failure;
+  bool relaxed = false;
+  EXPECT_FALSE(quad_detail::quantize(layout, QuadOptions{}, &failure, &relaxed));
+  const std::vector<int> unbalanced = quad_detail::unbalanced_patches(layout);
+  ASSERT_FALSE(unbalanced.empty());
+  for (int patch : unbalanced) EXPECT_TRUE(patch == 0 || patch == 1) << patch;
+}
+
 // On a flat grid (field along x, target size 1, mesh edges 0.1) with a curve S along
 // y = 2 from x = 0.5 to 3 and a barrier along x = 3: a walk along +x that starts 0.2
 // from S joins S across a link of at most two edges once it is clear of its start; one

@@ -237,7 +237,8 @@ bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* fai
 void release_quantize_thread();
 
 // The patches whose side equalities cannot all hold even with every interior arc free to be
-// 0 (loop arcs ≥ 1): those that need slack in the LP that minimises the total imbalance.
+// 0 (loop arcs ≥ 1), or only with a side of a patch on a loop at 0 (quantize keeps an edge
+// there): those that need slack in the LP that minimises the total imbalance.
 std::vector<int> unbalanced_patches(const PatchLayout& patches);
 // Merges `patch` with a neighbour by taking the shortest separatrix arc on its boundary off
 // the layout (build_patches is then run again); false if it has none left to remove.
