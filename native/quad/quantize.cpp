@@ -50,6 +50,14 @@ std::vector<int> sides_per_arc(const PatchLayout& layout) {
   return sides_of;
 }
 
+// Whether the patch has a side on a loop (an arc on one patch side only).
+bool on_loop(const Patch& patch, const std::vector<int>& sides_of) {
+  for (const auto& side : patch.sides)
+    for (auto& [a, reversed] : side)
+      if (sides_of[a] == 1) return true;
+  return false;
+}
+
 // The patches' two equalities Σ(side k) − Σ(side k + 2) = 0 as arc → coefficient, summed
 // (an arc on both opposite sides of one patch cancels there); rows that cancel entirely
 // are left out.
@@ -198,10 +206,7 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
   // bound of 1 on the vanished side's longest arc and the program solved again, 1.2 s a
   // time on the 6 x 6 net).
   for (const Patch& patch : layout.patches) {
-    bool on_loop = false;
-    for (const auto& side : patch.sides)
-      for (auto& [a, reversed] : side) on_loop |= sides_of[a] == 1;
-    if (!on_loop) continue;
+    if (!on_loop(patch, sides_of)) continue;
     for (const auto& side : patch.sides) {
       bool may_vanish = !side.empty();
       std::map<int, int> coefficient;
@@ -284,10 +289,7 @@ std::vector<int> unbalanced_patches(const PatchLayout& layout) {
   std::vector<std::pair<int, int>> loop_slack;  // (slack column, patch)
   for (size_t p = 0; p < layout.patches.size(); ++p) {
     const Patch& patch = layout.patches[p];
-    bool on_loop = false;
-    for (const auto& side : patch.sides)
-      for (auto& [a, reversed] : side) on_loop |= sides_of[a] == 1;
-    if (!on_loop) continue;
+    if (!on_loop(patch, sides_of)) continue;
     for (const auto& side : patch.sides) {
       bool interior = !side.empty();
       for (auto& [a, reversed] : side) interior &= sides_of[a] != 1;
