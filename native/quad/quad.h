@@ -189,7 +189,10 @@ struct QuadStats {
   // band of rows crowded into one patch's narrow part, a crumpled junction).
   int skewed_quads = 0;
   // Quad normal · design normal at the design vertex closest to its centre ≤ 0, or the
-  // quad spans a thin part (its normal over 75° from the design's at all four corners).
+  // quad spans a thin part (its normal over 75° from the design's at all four corners),
+  // or, unless within 30° of that vertex's normal, it faces against or stands more than
+  // 80° on the component's triangles under its centre (quad_detail::turned_over; the
+  // stage measures so, measure_cage(cage, design) by the vertex alone).
   int flipped_quads = 0;
   int degenerate_quads = 0;  // a corner angle below 1° or a repeated corner
   int patches = 0;
