@@ -76,20 +76,20 @@ std::vector<Vec3> ComponentLocator::normals_at(const Vec3& p, int* hint) const {
   const double w[3] = {(b - at).cross(c - at).dot(n) / area, (c - at).cross(a - at).dot(n) / area,
                        (a - at).cross(b - at).dot(n) / area};
   constexpr double kOnEdge = 1e-9;
-  std::vector<int> on;  // corners with weight: 1 is a vertex, 2 an edge, 3 the inside
+  int on[3], weighted = 0;  // corners with weight: 1 is a vertex, 2 an edge, 3 the inside
   for (int i = 0; i < 3; ++i)
-    if (w[i] > kOnEdge) on.push_back(i);
+    if (w[i] > kOnEdge) on[weighted++] = i;
   std::vector<Vec3> out{surface_.face_normal[f]};
   auto add = [&](int g) {
     if (g >= 0 && g != f && surface_.in(g)) out.push_back(surface_.face_normal[g]);
   };
-  if (on.size() == 2) {  // on the edge between those two corners
+  if (weighted == 2) {  // on the edge between those two corners
     for (auto h : surface_.mesh.fh_range(fh)) {
       const int x = surface_.from(h.idx()), y = surface_.to(h.idx());
       if ((x == v[on[0]] || x == v[on[1]]) && (y == v[on[0]] || y == v[on[1]]))
         add(surface_.face(h.idx() ^ 1));
     }
-  } else if (on.size() == 1) {  // at a vertex: its fan
+  } else if (weighted == 1) {  // at a vertex: its fan
     for (auto g : surface_.mesh.vf_range(surface_.mesh.vertex_handle(v[on[0]]))) add(g.idx());
   }
   return out;

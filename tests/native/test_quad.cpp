@@ -103,11 +103,11 @@ int check_cage(const QuadCage& cage, const Partitioned& r) {
     for (const Vec3& x : p) reach = std::max(reach, (x - centroid.back()).norm());
   }
   int flipped = 0;
+  std::vector<double> to_centroid(centroid.size());
   for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
     Vec3 c[4];
     for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
     const Vec3 centre = (c[0] + c[1] + c[2] + c[3]) / 4;
-    std::vector<double> to_centroid(centroid.size());
     double nearest = 1e300;
     for (size_t f = 0; f < centroid.size(); ++f)
       nearest = std::min(nearest, to_centroid[f] = (centroid[f] - centre).norm());
@@ -791,9 +791,11 @@ TEST(Quad, AWalkOneRowBesideASingularityReachesIt) {
   const std::vector<int>& walked = layout.curves.back().vertices;
   EXPECT_EQ(walked.back(), singular);
   // Off its row only within the last target edge before the singular vertex.
-  for (int v : walked)
-    if (mesh.point(mesh.vertex_handle(v))[0] < 1.2)
+  for (int v : walked) {
+    if (mesh.point(mesh.vertex_handle(v))[0] < 1.2) {
       EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[1], 0.63, 1e-9);
+    }
+  }
 }
 
 TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
