@@ -277,10 +277,14 @@ def mesh_defects(obj):
 
 
 def write_obj(path, vertices, triangles):
-    """Plain OBJ: 'v x y z' lines (float32 round trip) and 1-based 'f a b c' lines."""
+    """Plain OBJ: 'v x y z' lines and 1-based 'f a b c' lines.
+
+    17 digits: the world-space float64 vertices round-trip exactly, so the command line
+    converts the very design the add-on passes (with 9 digits lattice's design moved by
+    1e-9 and the quad stage kept another layout)."""
     with open(path, "w") as out:
         out.write("# genbrep fixture, world space\n")
-        np.savetxt(out, vertices, fmt="v %.9g %.9g %.9g")
+        np.savetxt(out, vertices, fmt="v %.17g %.17g %.17g")
         np.savetxt(out, triangles + 1, fmt="f %d %d %d")
 
 
