@@ -213,6 +213,22 @@ std::vector<int> best_corners(const std::vector<Corner>& nodes, const std::vecto
   return best;
 }
 
+// A sector's quarter turns: its override, if any, else its reading. Once the rounds stall,
+// an override no longer hides a dangling end (build_patches).
+int read_with_override(const std::map<int, int>& quarter_override, const Corner& k, bool stalled) {
+  const auto o = quarter_override.find(k.halfedge_out);
+  return o != quarter_override.end() && !(stalled && k.read == 4) ? o->second : k.read;
+}
+
+// Whether a patch of one boundary cycle passes a vertex twice (a pinched disk).
+bool passes_a_vertex_twice(const Surface& s, const std::vector<Cycle>& cycles) {
+  if (cycles.size() != 1) return false;
+  std::vector<int> cv;
+  for (int h : cycles[0].halfedges) cv.push_back(s.from(h));
+  std::sort(cv.begin(), cv.end());
+  return std::adjacent_find(cv.begin(), cv.end()) != cv.end();
+}
+
 // Takes the stretch `vertices` (consecutive along one open curve, either way round) off the
 // layout; false if it is no longer there (an earlier fix changed that curve).
 bool remove_stretch(const Surface& s, Layout& layout, std::vector<int> vertices) {
@@ -605,22 +621,60 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     // looked at again after its corners are re-read: --p below).
     std::vector<Examined*> patches_in_order;
     for (auto& [key, patch] : examined) patches_in_order.push_back(&patch);
+    // The corners of every patch chosen at once (corners.cpp) before each is looked at
+    // alone: disks (one cycle, χ = 1, no vertex twice, no reflex or dangling reading) take
+    // part; the others keep their readings and are cut below.
+    if (options.fit_corners && options.global_corners) {
+      std::vector<SectorChoice> sectors;
+      std::vector<int> sector_halfedge;
+      std::map<int, int> node_sum;  // Σ quarters as read, per node
+      const int n = static_cast<int>(patches_in_order.size());
+      for (int p = 0; p < n; ++p) {
+        Examined& patch = *patches_in_order[p];
+        bool disk = patch.cycles.size() == 1 && patch.chi == 1 &&
+                    !passes_a_vertex_twice(s, patch.cycles);
+        for (Cycle& c : patch.cycles)
+          for (Corner& k : c.nodes) {
+            k.quarters = read_with_override(quarter_override, k, stalled);
+            disk &= k.quarters <= 2;
+          }
+        for (const Cycle& c : patch.cycles)
+          for (const Corner& k : c.nodes) {
+            SectorChoice sector;
+            sector.patch = disk ? p : -1;
+            sector.node = s.from(k.halfedge_out);
+            sector.angle = k.angle;
+            sector.quarters = k.quarters;
+            sector.free = k.quarters == 1 || k.quarters == 2;
+            sectors.push_back(sector);
+            sector_halfedge.push_back(k.halfedge_out);
+            node_sum[sector.node] += k.quarters;
+          }
+      }
+      // What a node's sectors should add up to: a traced singularity's valence, 4 inside,
+      // and on a loop what they read (the boundary's own turn there).
+      std::map<int, int> target;
+      for (const auto& [v, sum] : node_sum) {
+        const auto singular = singular_valence.find(v);
+        target[v] = layout.on_loop[v]                        ? sum
+                    : singular != singular_valence.end() ? singular->second
+                                                         : 4;
+      }
+      const std::vector<int> chosen =
+          choose_corners(sectors, n, target, options.corner_node_price);
+      for (size_t i = 0; i < sectors.size(); ++i)
+        if (chosen[i] != sectors[i].quarters) {
+          quarter_override[sector_halfedge[i]] = chosen[i];
+          ++out.recornered;
+        }
+    }
     for (int p = 0; p < static_cast<int>(patches_in_order.size()); ++p) {
       const std::vector<int>& faces = patches_in_order[p]->faces;
       const long chi = patches_in_order[p]->chi;
       std::vector<Cycle>& cycles = patches_in_order[p]->cycles;
       for (Cycle& c : cycles)
-        for (Corner& k : c.nodes) {
-          auto o = quarter_override.find(k.halfedge_out);
-          k.quarters = o != quarter_override.end() && !(stalled && k.read == 4) ? o->second : k.read;
-        }
-      bool repeated = false;
-      if (cycles.size() == 1) {
-        std::vector<int> cv;
-        for (int h : cycles[0].halfedges) cv.push_back(s.from(h));
-        std::sort(cv.begin(), cv.end());
-        repeated = std::adjacent_find(cv.begin(), cv.end()) != cv.end();
-      }
+        for (Corner& k : c.nodes) k.quarters = read_with_override(quarter_override, k, stalled);
+      const bool repeated = passes_a_vertex_twice(s, cycles);
       const Corner* dangling = nullptr;
       const Corner* reflex = nullptr;
       for (const Cycle& c : cycles)

@@ -542,7 +542,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   quad_detail::trace_separatrices(surface, layout, options, *messages);
   // The rest is deterministic in the traced curves and the options it reads: a choice
   // that traced the same curves as an earlier one with the same options gives its result.
-  std::size_t traced = (options.fit_corners ? 2u : 1u) * 1000003u +
+  std::size_t traced = (options.fit_corners ? (options.global_corners ? 3u : 2u) : 1u) * 1000003u +
                        static_cast<std::size_t>(options.max_balance_rounds);
   for (const auto& curve : layout.curves)
     for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
@@ -712,7 +712,7 @@ bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meet
   const int off_a = a.irregular_off_singularities, off_b = b.irregular_off_singularities;
   if (meets_a && off_a != off_b &&
       (std::min(off_a, off_b) == 0 ||
-       std::abs(off_a - off_b) > std::max(2.0, 0.15 * std::max(off_a, off_b))))
+       std::abs(off_a - off_b) > std::max(1.0, 0.15 * std::max(off_a, off_b))))
     return off_a < off_b;
   if (meets_a && std::abs(a.skewed_quads - b.skewed_quads) >
                      std::max(5.0, 0.2 * std::max(a.skewed_quads, b.skewed_quads)))
@@ -767,14 +767,20 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   // the requested layout).
   for (bool balance : {false, true})
     for (const auto& [what, change] : layouts)
-      for (bool flip_corners : {false, true}) {
+      for (int corners : {0, 1, 2}) {  // as asked; all at once or patch by patch; re-read
         QuadOptions o = options;
         change(o);
-        if (flip_corners) o.fit_corners = !o.fit_corners;
+        if (corners == 1 && !o.fit_corners) continue;
+        if (corners == 1) o.global_corners = !o.global_corners;
+        if (corners == 2) o.fit_corners = !o.fit_corners;
+        const bool flip_corners = corners != 0;
         std::string name = what;
         if (flip_corners) {
           name += name.empty() ? "" : ", ";
-          name += o.fit_corners ? "corners fitted as rectangles" : "corners re-read one at a time";
+          name += corners == 1 ? (o.global_corners ? "corners chosen for all patches at once"
+                                                   : "corners fitted patch by patch")
+                  : o.fit_corners ? "corners fitted as rectangles"
+                                  : "corners re-read one at a time";
         }
         // Joins leave layouts that often balance only once a join is taken back (merging
         // an unbalanced patch drops its shortest arc, the link): they are tried with
@@ -783,10 +789,11 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         if (balance) {
           name += name.empty() ? "" : ", ";
           name += "unbalanced patches merged";
-        } else if (!o.join_parallel && !(what[0] == '\0' && !flip_corners)) {
-          // The requested layout merges unbalanced patches too: through Blender, lattice's
-          // was one small patch from balancing, and without merging a sparser choice with
-          // 22 irregular vertices off singularities was kept (4 with the merge).
+        } else if (!o.join_parallel && !(what[0] == '\0' && corners != 2)) {
+          // The requested layout (corners chosen either way) merges unbalanced patches too:
+          // through Blender, lattice's was one small patch from balancing, and without
+          // merging a sparser choice with 22 irregular vertices off singularities was kept
+          // (4 with the merge).
           o.max_balance_rounds = 0;
         }
         variants.push_back({name, o});

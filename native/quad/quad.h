@@ -16,7 +16,9 @@
 //      only meet at mesh vertices, so the graph is embedded by construction). ± pairs of
 //      singularities closer than `pair_cancel_distance` are not traced (they cancel).
 //      Patches that are not topological disks with four corners get extra field-aligned
-//      cuts from their boundary; corners are read from the angles between the curves.
+//      cuts from their boundary; corners are read from the angles between the curves,
+//      and where a patch does not read four, re-read for all patches at once (a min-cost
+//      flow, corners.cpp) so that a node keeps the quarter turns it has, or patch by patch.
 //      Sliver patches that cannot be cut (one triangle between curves) and dangling
 //      separatrices are merged away by taking a stretch of separatrix off the layout.
 //   2. quantization: every layout arc gets an integer count ≥ 1 near length / size; the
@@ -87,6 +89,18 @@ struct QuadOptions {
   // Patches whose angles do not give four corners: choose the four nodes that best make a
   // rectangle (angles and opposite side lengths), or re-read one angle at a time (false).
   bool fit_corners = true;
+  // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
+  // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
+  // by the patch across rather than left as an irregular vertex; what that cannot make
+  // four-sided is fitted patch by patch. false: patch by patch only (the next layout
+  // choice either way).
+  bool global_corners = true;
+  // What a node whose sectors do not add up to its quarter turns (an irregular vertex off
+  // the singularities) costs, per quarter turn, against re-reading sectors (a sector's
+  // cost: how much further its angle is from the new reading, in quarter turns). At 1.5 and
+  // 2.5 the 3 x 3 net's joint cage folded (18 off kept, from another choice); at 0.75, 11
+  // off against 8.
+  double corner_node_price = 1.0;
   // Two curves meeting at a node at less than 45° are a cusp: field lines converging, not a
   // corner. The sector between them reads 0 quarter turns, so the patch there is a
   // triangle with an empty side, which quantization collapses onto one curve, instead of a

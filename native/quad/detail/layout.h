@@ -218,6 +218,22 @@ struct PatchReading {
   std::unique_ptr<State> state;
 };
 
+// One sector of a patch boundary at a layout node, for choose_corners.
+struct SectorChoice {
+  int patch = -1;      // the patch's row (≥ 0) or -1: a patch left out, its readings kept
+  int node = -1;       // the node (vertex)
+  double angle = 0;    // the sector's angle (radians; sector_angle)
+  int quarters = 2;    // its reading (overrides applied)
+  bool free = false;   // read 1 or 2, may become the other
+};
+// Quarter turns for every sector, chosen at once (corners.cpp): every patch of `patches`
+// whose free sectors can make it four-cornered is made so, with the fewest quarter turns
+// moved off the angles and the fewest nodes whose sectors do not add up to their
+// `node_target` (vertex → quarter turns; 4 where absent), each such unit priced
+// `node_price` quarter turns of angle. Returns the chosen quarters, in the order given.
+std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int patches,
+                                const std::map<int, int>& node_target, double node_price);
+
 // Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
 // disks with extra traces. Throws Error{StageFailure} if some patch stays invalid.
 // `reading` (optional): what an earlier call on this layout read; updated to what this one
