@@ -220,7 +220,7 @@ struct PatchReading {
 
 // One sector of a patch boundary at a layout node, for choose_corners.
 struct SectorChoice {
-  int patch = -1;      // the patch's row (≥ 0) or -1: a patch left out, its readings kept
+  int patch = -1;      // the patch (0 .. patches − 1), or -1: left out, its readings kept
   int node = -1;       // the node (vertex)
   double angle = 0;    // the sector's angle (radians; sector_angle)
   int quarters = 2;    // its reading (overrides applied)
