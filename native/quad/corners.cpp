@@ -12,7 +12,8 @@
 // its patch and its node), solved exactly by GLPK's out-of-kilter algorithm on integral
 // data; it is the linear program "q_s ∈ [1, 2] per free sector, Σ(2 − q_s) = 4 per patch,
 // Σ q_s + slack = target per node, minimise Σ |angle_s − q_s · 90°| + price · |slack|",
-// whose matrix is totally unimodular. (That LP through GLPK's simplex took 0.14–0.73 s a
+// whose matrix is totally unimodular. A sector may carry a side cost too (layout.cpp: how
+// far from a rectangle its patch would be, which a flow cannot weigh itself). (That LP through GLPK's simplex took 0.14–0.73 s a
 // round on the 6 x 6 net; the flow about 0.05 s.)
 // Complexity: one min-cost flow on (patches + nodes) vertices and (sectors + 2 nodes) arcs.
 #include <glpk.h>
@@ -113,7 +114,8 @@ std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int pa
     const SectorChoice& s = sectors[i];
     if (!s.free || s.patch < 0 || !vertex_of[s.patch]) continue;
     const int patch = vertex_of[s.patch], node = node_vertex[s.node];
-    const double cost = deviation(s.angle, 3 - s.quarters) - deviation(s.angle, s.quarters);
+    const double cost =
+        deviation(s.angle, 3 - s.quarters) - deviation(s.angle, s.quarters) + s.side_cost;
     arc_of[i] = s.quarters == 2 ? add_arc(node, patch, 1, cost) : add_arc(patch, node, 1, cost);
   }
   double total = 0;

@@ -229,6 +229,27 @@ bool passes_a_vertex_twice(const Surface& s, const std::vector<Cycle>& cycles) {
   return std::adjacent_find(cv.begin(), cv.end()) != cv.end();
 }
 
+// How far a patch whose nodes read `quarters` is from a rectangle: Σ over its two pairs of
+// opposite sides of 2 |difference| / sum of their targets (`after`: the target of the arc
+// after each node), as best_corners weighs it; -1 if it does not turn 4.
+double side_imbalance(const std::vector<int>& quarters, const std::vector<double>& after) {
+  const int m = static_cast<int>(quarters.size());
+  int first = 0, turning = 0;
+  for (int q : quarters) turning += 2 - q;
+  while (first < m && quarters[first] == 2) ++first;
+  if (turning != 4 || first == m) return -1;
+  double side[4] = {0, 0, 0, 0};
+  for (int t = 0, k = -1; t < m; ++t) {
+    const int i = (first + t) % m;
+    k += quarters[i] < 2 ? 2 - quarters[i] : 0;
+    side[k] += after[i];
+  }
+  double imbalance = 0;
+  for (int k = 0; k < 2; ++k)
+    imbalance += 2 * std::abs(side[k] - side[k + 2]) / std::max(side[k] + side[k + 2], 1e-9);
+  return imbalance;
+}
+
 // Takes the stretch `vertices` (consecutive along one open curve, either way round) off the
 // layout; false if it is no longer there (an earlier fix changed that curve).
 bool remove_stretch(const Surface& s, Layout& layout, std::vector<int> vertices) {
@@ -638,9 +659,37 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
             k.quarters = read_with_override(quarter_override, k, stalled);
             disk &= k.quarters <= 2;
           }
+        // A patch one corner off: what re-reading each sector alone does to its sides (the
+        // flow cannot weigh a rectangle's sides, which best_corners does: without this the
+        // joint reading left the 5 x 5 net's cage with 245 quads over 2.5x the target).
+        std::vector<double> side_cost;
+        if (disk && options.corner_side_weight > 0) {
+          const Cycle& c = patch.cycles[0];
+          std::vector<int> quarters;
+          std::vector<double> after;
+          int turning = 0;
+          for (const Corner& k : c.nodes) {
+            quarters.push_back(k.quarters);
+            after.push_back(out.arcs[out.halfedge_arc[k.halfedge_out] / 2].target);
+            turning += 2 - k.quarters;
+          }
+          if (std::abs(turning - 4) == 1)
+            for (size_t i = 0; i < quarters.size(); ++i) {
+              double cost = 0;
+              if (quarters[i] == 1 || quarters[i] == 2) {
+                std::vector<int> changed = quarters;
+                changed[i] = 3 - changed[i];
+                cost = std::max(0.0, side_imbalance(changed, after));
+              }
+              side_cost.push_back(cost * options.corner_side_weight);
+            }
+        }
+        int index = 0;
         for (const Cycle& c : patch.cycles)
           for (const Corner& k : c.nodes) {
             SectorChoice sector;
+            if (!side_cost.empty()) sector.side_cost = side_cost[index];
+            ++index;
             sector.patch = disk ? p : -1;
             sector.node = s.from(k.halfedge_out);
             sector.angle = k.angle;

@@ -101,6 +101,12 @@ struct QuadOptions {
   // 2.5 the 3 x 3 net's joint cage folded (18 off kept, from another choice); at 0.75, 11
   // off against 8.
   double corner_node_price = 1.0;
+  // Re-reading a sector of a patch one corner off also costs this times how far the patch
+  // is then from a rectangle (best_corners' side term: Σ 2 |difference| / sum over its
+  // pairs of opposite side targets). Nets of genus 9-49, irregular vertices off
+  // singularities / quads over 2.5x the target: 0: 153 / 514; 0.25: 196 / 336; 0.5: 193 /
+  // 332; 1: 182 / 478 (patch by patch: 298 / 324).
+  double corner_side_weight = 0.5;
   // Two curves meeting at a node at less than 45° are a cusp: field lines converging, not a
   // corner. The sector between them reads 0 quarter turns, so the patch there is a
   // triangle with an empty side, which quantization collapses onto one curve, instead of a

@@ -225,6 +225,7 @@ struct SectorChoice {
   double angle = 0;    // the sector's angle (radians; sector_angle)
   int quarters = 2;    // its reading (overrides applied)
   bool free = false;   // read 1 or 2, may become the other
+  double side_cost = 0;  // added to the cost of re-reading it (quarter turns)
 };
 // Quarter turns for every sector, chosen at once (corners.cpp): every patch of `patches`
 // whose free sectors can make it four-cornered is made so, with the fewest quarter turns
