@@ -348,6 +348,75 @@ struct Examined {
   std::vector<Cycle> cycles;
 };
 
+// The corners of every patch chosen at once (corners.cpp) before build_patches looks at
+// each alone: disks (one cycle, χ = 1, no vertex twice, no reflex or dangling reading) take
+// part; the others keep their readings and are cut. The choices go into quarter_override;
+// returns how many sectors it re-read.
+int read_corners_together(const Surface& s, const Layout& layout, const QuadOptions& options,
+                          const std::map<int, int>& singular_valence, const PatchLayout& out,
+                          const std::vector<Examined*>& patches, bool stalled,
+                          std::map<int, int>& quarter_override) {
+  std::vector<SectorChoice> sectors;
+  std::vector<int> sector_halfedge;
+  std::map<int, int> node_sum;  // Σ quarters as read, per node
+  const int n = static_cast<int>(patches.size());
+  for (int p = 0; p < n; ++p) {
+    Examined& patch = *patches[p];
+    bool disk =
+        patch.cycles.size() == 1 && patch.chi == 1 && !passes_a_vertex_twice(s, patch.cycles);
+    int turning = 0;
+    for (Cycle& c : patch.cycles)
+      for (Corner& k : c.nodes) {
+        k.quarters = read_with_override(quarter_override, k, stalled);
+        disk &= k.quarters <= 2;
+        turning += 2 - k.quarters;
+      }
+    const size_t first = sectors.size();
+    std::vector<int> quarters;
+    std::vector<double> after;  // target of the arc after each node
+    for (const Cycle& c : patch.cycles)
+      for (const Corner& k : c.nodes) {
+        SectorChoice sector;
+        sector.patch = disk ? p : -1;
+        sector.node = s.from(k.halfedge_out);
+        sector.angle = k.angle;
+        sector.quarters = k.quarters;
+        sector.free = k.quarters == 1 || k.quarters == 2;
+        sectors.push_back(sector);
+        sector_halfedge.push_back(k.halfedge_out);
+        node_sum[sector.node] += k.quarters;
+        quarters.push_back(k.quarters);
+        after.push_back(out.arcs[out.halfedge_arc[k.halfedge_out] / 2].target);
+      }
+    // A patch one corner off: what re-reading each sector alone does to its sides (the flow
+    // cannot weigh a rectangle's sides, which best_corners does: without this the joint
+    // reading left the 5 x 5 net's cage with 245 quads over 2.5x the target).
+    if (!disk || options.corner_side_weight <= 0 || std::abs(turning - 4) != 1) continue;
+    for (size_t i = 0; i < quarters.size(); ++i) {
+      if (!sectors[first + i].free) continue;
+      std::vector<int> changed = quarters;
+      changed[i] = 3 - changed[i];
+      sectors[first + i].side_cost =
+          options.corner_side_weight * std::max(0.0, side_imbalance(changed, after));
+    }
+  }
+  // What a node's sectors should add up to: a traced singularity's valence, 4 inside, and
+  // on a loop what they read (the boundary's own turn there).
+  std::map<int, int> target;
+  for (const auto& [v, sum] : node_sum) {
+    const auto singular = singular_valence.find(v);
+    target[v] = layout.on_loop[v] ? sum : singular != singular_valence.end() ? singular->second : 4;
+  }
+  const std::vector<int> chosen = choose_corners(sectors, n, target, options.corner_node_price);
+  int reread = 0;
+  for (size_t i = 0; i < sectors.size(); ++i)
+    if (chosen[i] != sectors[i].quarters) {
+      quarter_override[sector_halfedge[i]] = chosen[i];
+      ++reread;
+    }
+  return reread;
+}
+
 }  // namespace
 
 struct PatchReading::State {
@@ -642,81 +711,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
     // looked at again after its corners are re-read: --p below).
     std::vector<Examined*> patches_in_order;
     for (auto& [key, patch] : examined) patches_in_order.push_back(&patch);
-    // The corners of every patch chosen at once (corners.cpp) before each is looked at
-    // alone: disks (one cycle, χ = 1, no vertex twice, no reflex or dangling reading) take
-    // part; the others keep their readings and are cut below.
-    if (options.fit_corners && options.global_corners) {
-      std::vector<SectorChoice> sectors;
-      std::vector<int> sector_halfedge;
-      std::map<int, int> node_sum;  // Σ quarters as read, per node
-      const int n = static_cast<int>(patches_in_order.size());
-      for (int p = 0; p < n; ++p) {
-        Examined& patch = *patches_in_order[p];
-        bool disk = patch.cycles.size() == 1 && patch.chi == 1 &&
-                    !passes_a_vertex_twice(s, patch.cycles);
-        for (Cycle& c : patch.cycles)
-          for (Corner& k : c.nodes) {
-            k.quarters = read_with_override(quarter_override, k, stalled);
-            disk &= k.quarters <= 2;
-          }
-        // A patch one corner off: what re-reading each sector alone does to its sides (the
-        // flow cannot weigh a rectangle's sides, which best_corners does: without this the
-        // joint reading left the 5 x 5 net's cage with 245 quads over 2.5x the target).
-        std::vector<double> side_cost;
-        if (disk && options.corner_side_weight > 0) {
-          const Cycle& c = patch.cycles[0];
-          std::vector<int> quarters;
-          std::vector<double> after;
-          int turning = 0;
-          for (const Corner& k : c.nodes) {
-            quarters.push_back(k.quarters);
-            after.push_back(out.arcs[out.halfedge_arc[k.halfedge_out] / 2].target);
-            turning += 2 - k.quarters;
-          }
-          if (std::abs(turning - 4) == 1)
-            for (size_t i = 0; i < quarters.size(); ++i) {
-              double cost = 0;
-              if (quarters[i] == 1 || quarters[i] == 2) {
-                std::vector<int> changed = quarters;
-                changed[i] = 3 - changed[i];
-                cost = std::max(0.0, side_imbalance(changed, after));
-              }
-              side_cost.push_back(cost * options.corner_side_weight);
-            }
-        }
-        int index = 0;
-        for (const Cycle& c : patch.cycles)
-          for (const Corner& k : c.nodes) {
-            SectorChoice sector;
-            if (!side_cost.empty()) sector.side_cost = side_cost[index];
-            ++index;
-            sector.patch = disk ? p : -1;
-            sector.node = s.from(k.halfedge_out);
-            sector.angle = k.angle;
-            sector.quarters = k.quarters;
-            sector.free = k.quarters == 1 || k.quarters == 2;
-            sectors.push_back(sector);
-            sector_halfedge.push_back(k.halfedge_out);
-            node_sum[sector.node] += k.quarters;
-          }
-      }
-      // What a node's sectors should add up to: a traced singularity's valence, 4 inside,
-      // and on a loop what they read (the boundary's own turn there).
-      std::map<int, int> target;
-      for (const auto& [v, sum] : node_sum) {
-        const auto singular = singular_valence.find(v);
-        target[v] = layout.on_loop[v]                        ? sum
-                    : singular != singular_valence.end() ? singular->second
-                                                         : 4;
-      }
-      const std::vector<int> chosen =
-          choose_corners(sectors, n, target, options.corner_node_price);
-      for (size_t i = 0; i < sectors.size(); ++i)
-        if (chosen[i] != sectors[i].quarters) {
-          quarter_override[sector_halfedge[i]] = chosen[i];
-          ++out.recornered;
-        }
-    }
+    if (options.fit_corners && options.global_corners)
+      out.recornered += read_corners_together(s, layout, options, singular_valence, out,
+                                              patches_in_order, stalled, quarter_override);
     for (int p = 0; p < static_cast<int>(patches_in_order.size()); ++p) {
       const std::vector<int>& faces = patches_in_order[p]->faces;
       const long chi = patches_in_order[p]->chi;
