@@ -1269,6 +1269,10 @@ TEST(Quad, CornersChosenTogetherPairUpAtTheNodeTheyShare) {
   sectors.erase(sectors.begin() + 5, sectors.begin() + 10);
   const std::vector<int> alone = quad_detail::choose_corners(sectors, 1, target, 1.0);
   EXPECT_EQ(alone, (std::vector<int>{1, 1, 1, 1, 2, 1}));
+  // Unless re-reading it would make a bad rectangle (its side cost): then the straight 180°.
+  sectors[0].side_cost = 2.0;
+  EXPECT_EQ(quad_detail::choose_corners(sectors, 1, target, 1.0),
+            (std::vector<int>{2, 1, 1, 1, 1, 1}));
   // A patch that cannot turn 4 (three corners, nothing straight to re-read) keeps its
   // readings, and so does every patch when none is out of balance.
   const std::vector<quad_detail::SectorChoice> stuck = {
