@@ -151,6 +151,43 @@ double sector_angle(const Surface& s, const Layout& layout, int h_out, int h_in,
   return angle < kPi ? 2 * kPi : angle;
 }
 
+// (quad/detail/layout.h)
+int node_quarters(const Surface& s, const Layout& layout, int h_out, int valence) {
+  if (layout.on_loop[s.from(h_out)]) return -1;
+  // The curves' halfedges leaving the node, counter-clockwise from h_out.
+  std::vector<int> spokes{h_out};
+  for (int g = h_out, guard = 0;; ++guard) {
+    int c = s.mesh.prev_halfedge_handle(s.mesh.halfedge_handle(g)).idx() ^ 1;
+    for (int turn = 0; layout.edge_curve[c >> 1] < 0 && c != g && turn < 256; ++turn)
+      c = s.mesh.prev_halfedge_handle(s.mesh.halfedge_handle(c)).idx() ^ 1;
+    if (c == g || guard > 64) return -1;  // one curve only, or lost
+    if (c == h_out) break;
+    spokes.push_back(c);
+    g = c;
+  }
+  // Read from the lowest halfedge on, so that every sector of the node is read from the
+  // same grid whichever one is asked for.
+  const int m = static_cast<int>(spokes.size());
+  const int start = static_cast<int>(std::min_element(spokes.begin(), spokes.end()) - spokes.begin());
+  std::vector<double> at{0};  // each curve's direction in quarter turns from the first's
+  for (int t = 0; t < m; ++t) {
+    const int g = spokes[(start + t) % m], next = spokes[(start + t + 1) % m];
+    at.push_back(at.back() + sector_angle(s, layout, g, next ^ 1, valence) / (kPi / 2));
+  }
+  const double total = at.back();
+  if (std::abs(total - std::round(total)) > 0.5 - 1e-9) return -1;
+  // The offset that puts the directions closest to the grid (one of them on it).
+  double offset = 0, best = 1e300;
+  for (int j = 0; j < m; ++j) {
+    const double o = std::round(at[j]) - at[j];
+    double miss = 0;
+    for (int k = 0; k < m; ++k) miss += std::abs(at[k] + o - std::round(at[k] + o));
+    if (miss < best - 1e-12) best = miss, offset = o;
+  }
+  const int t = (m - start) % m;  // h_out's place from the first
+  return static_cast<int>(std::lround(at[t + 1] + offset) - std::lround(at[t] + offset));
+}
+
 namespace {
 
 // The next patch-boundary halfedge after h: rotate around to(h) inside the patch.
@@ -679,7 +716,12 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                         sector_angle(s, layout, h_out, h_in,
                                      singular == singular_valence.end() ? 0 : singular->second),
                         2};
-          corner.quarters = std::clamp(int(std::lround(corner.angle / (kPi / 2))),
+          const int together =
+              options.node_readings
+                  ? node_quarters(s, layout, h_out,
+                                  singular == singular_valence.end() ? 0 : singular->second)
+                  : -1;
+          corner.quarters = std::clamp(together >= 0 ? together : int(std::lround(corner.angle / (kPi / 2))),
                                        options.cusp_corners ? 0 : 1, 3);
           if (corner.quarters == 0 && layout.no_cusp.count(h_out)) corner.quarters = 1;
           if (h_out == (h_in ^ 1)) corner.quarters = 4;  // a dangling end: full turn

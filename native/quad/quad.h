@@ -89,6 +89,10 @@ struct QuadOptions {
   // Patches whose angles do not give four corners: choose the four nodes that best make a
   // rectangle (angles and opposite side lengths), or re-read one angle at a time (false).
   bool fit_corners = true;
+  // A sector's quarter turns are read at its node together with the node's other sectors
+  // (the curves' directions rounded once onto one grid), so a node's readings add up to its
+  // quarter turns; false: each sector's angle rounded alone.
+  bool node_readings = true;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make

@@ -172,6 +172,16 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
 // full turn) and at a singular vertex of `valence` > 0 (scaled by valence / 4).
 double sector_angle(const Surface& s, const Layout& layout, int h_out, int h_in, int valence);
 
+// The quarter turns of the patch sector at from(h_out) that starts along h_out, read
+// together with every other sector at that node: the curves' directions there are placed
+// on one grid of quarter turns (each rounded once, at the offset that puts them closest to
+// it), and a sector reads the difference of its two ends. A node's sectors then add up to
+// what their angles do (4 inside, a traced singularity's `valence`), where rounding each
+// sector alone can leave an irregular vertex (curves at 45°, 180° and 270° read 2 + 1 + 2).
+// -1 where the node is on a loop, has one curve, or its sectors' angles do not add up to a
+// whole number of quarter turns (QuadOptions::node_readings).
+int node_quarters(const Surface& s, const Layout& layout, int h_out, int valence);
+
 struct Arc {
   std::vector<int> vertices;  // node to node along a curve
   int curve = -1;
