@@ -1447,21 +1447,34 @@ TEST(Quad, AWedgePatchIsCutAcross) {
 // with the same tangent are a cusp (≈ 0) on the side where their edges are 45° apart and
 // a full turn on the other; at a singular vertex of valence 5 the edges' 90° is 112.5°
 // (5 quarter turns fill the full turn there), whatever the tangents say.
-TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
-  const int n = 21;
-  const FlatGrid flat(n, 0.1);
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const int center = 10 * n + 10;
-  quad_detail::Layout layout = quad_detail::start_layout(s);
-  layout.curves = {grid_curve(n, 10, 10, 10, 20), grid_curve(n, 10, 10, 20, 20),
-                   grid_curve(n, 10, 10, 0, 10)};
-  for (auto& c : layout.curves) c.direction.assign(c.vertices.size(), Vec3(1, 0, 0));
-  for (int c = 0; c < 3; ++c) quad_detail::register_curve(s, layout, c);
-  auto halfedge = [&](int from, int to) {
+// Curves on a flat grid of 21 × 21 vertices (FlatGrid, spacing 0.1), registered as a
+// layout: curves meeting at its centre vertex, for sector readings.
+struct StarLayout {
+  static constexpr int n = 21, center = 10 * n + 10;
+  explicit StarLayout(std::vector<quad_detail::Curve> curves)
+      : flat(n, 0.1), s(flat.mesh, flat.partition, flat.field, 0), layout(quad_detail::start_layout(s)) {
+    layout.curves = std::move(curves);
+    for (int c = 0; c < static_cast<int>(layout.curves.size()); ++c)
+      quad_detail::register_curve(s, layout, c);
+  }
+  int halfedge(int from, int to) const {
     return flat.mesh.find_halfedge(flat.mesh.vertex_handle(from), flat.mesh.vertex_handle(to)).idx();
-  };
-  const int right = halfedge(center, center + 1), diagonal = halfedge(center, center + n + 1),
-            down = halfedge(center, center - n);
+  }
+  FlatGrid flat;
+  quad_detail::Surface s;
+  quad_detail::Layout layout;
+};
+
+TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
+  constexpr int n = StarLayout::n, center = StarLayout::center;
+  std::vector<quad_detail::Curve> curves = {grid_curve(n, 10, 10, 10, 20), grid_curve(n, 10, 10, 20, 20),
+                                            grid_curve(n, 10, 10, 0, 10)};
+  for (auto& c : curves) c.direction.assign(c.vertices.size(), Vec3(1, 0, 0));
+  const StarLayout star(curves);
+  const quad_detail::Surface& s = star.s;
+  const quad_detail::Layout& layout = star.layout;
+  const int right = star.halfedge(center, center + 1), diagonal = star.halfedge(center, center + n + 1),
+            down = star.halfedge(center, center - n);
   constexpr double kPi = 3.14159265358979323846;
   // Sector from `out` counter-clockwise to the curve that `in ^ 1` leaves along.
   EXPECT_LT(quad_detail::sector_angle(s, layout, right, diagonal ^ 1, 0), 0.01);
@@ -1476,20 +1489,14 @@ TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
 // quarter turns the three add up to 4, each 1 or 2, the same whichever sector is asked
 // first; and a node with a single curve (a dangling end) is left to the reading alone.
 TEST(Quad, SectorsAreReadTogetherAtTheirNode) {
-  const int n = 21;
-  const FlatGrid flat(n, 0.1);
-  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
-  const int center = 10 * n + 10;
-  quad_detail::Layout layout = quad_detail::start_layout(s);
-  layout.curves = {grid_curve(n, 10, 10, 20, 20), grid_curve(n, 10, 10, 10, 0),
-                   grid_curve(n, 10, 10, 0, 10), grid_curve(n, 2, 2, 2, 6)};
-  for (int c = 0; c < 4; ++c) quad_detail::register_curve(s, layout, c);
-  auto halfedge = [&](int from, int to) {
-    return flat.mesh.find_halfedge(flat.mesh.vertex_handle(from), flat.mesh.vertex_handle(to)).idx();
-  };
+  constexpr int n = StarLayout::n, center = StarLayout::center;
+  const StarLayout star({grid_curve(n, 10, 10, 20, 20), grid_curve(n, 10, 10, 10, 0),
+                         grid_curve(n, 10, 10, 0, 10), grid_curve(n, 2, 2, 2, 6)});
+  const quad_detail::Surface& s = star.s;
+  const quad_detail::Layout& layout = star.layout;
   // Counter-clockwise: the diagonal, left, down.
-  const int spokes[3] = {halfedge(center, center + n + 1), halfedge(center, center - 1),
-                         halfedge(center, center - n)};
+  const int spokes[3] = {star.halfedge(center, center + n + 1), star.halfedge(center, center - 1),
+                         star.halfedge(center, center - n)};
   constexpr double kPi = 3.14159265358979323846;
   int alone = 0, together = 0;
   for (int k = 0; k < 3; ++k) {
@@ -1502,7 +1509,7 @@ TEST(Quad, SectorsAreReadTogetherAtTheirNode) {
   }
   EXPECT_EQ(alone, 5);
   EXPECT_EQ(together, 4);
-  EXPECT_EQ(quad_detail::node_quarters(s, layout, halfedge(2 * n + 2, 2 * n + 3), 0), -1);
+  EXPECT_EQ(quad_detail::node_quarters(s, layout, star.halfedge(2 * n + 2, 2 * n + 3), 0), -1);
 }
 
 // A cusp: a curve converging onto another at under 45° leaves a thin triangle between
@@ -1873,9 +1880,10 @@ TEST(Quad, ExtraCutsConvergeOrStopEarly) {
     // choice; with the requested layout alone, that is the fallback.)
     const Said said = requested(defaults);
     EXPECT_EQ(said.diagnostics.find("four-sided disks"), std::string::npos) << said.diagnostics;
-    if (said.fallback)
+    if (said.fallback) {
       EXPECT_NE(said.diagnostics.find("the cage has"), std::string::npos)
           << "the requested layout failed before its cage:\n" << said.diagnostics;
+    }
   }
   // The stops, on the layout as its corners were read when they were measured (patch by
   // patch: read together, the 5 x 5 net's cuts make progress every round).
