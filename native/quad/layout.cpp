@@ -41,19 +41,6 @@ double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
   return angle;
 }
 
-struct Corner {
-  int halfedge_out;  // patch boundary halfedge leaving the node
-  int halfedge_in;   // patch boundary halfedge entering it
-  double angle;
-  int quarters;   // as used: the reading, or its override
-  int read = 2;   // the reading
-};
-
-struct Cycle {
-  std::vector<int> halfedges;  // patch on the left, in order
-  std::vector<Corner> nodes;   // nodes met along the cycle, in order
-};
-
 void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
   const int n_curves = static_cast<int>(layout.curves.size());
   std::vector<int> degree(s.mesh.n_vertices(), 0);
@@ -151,43 +138,6 @@ double sector_angle(const Surface& s, const Layout& layout, int h_out, int h_in,
   return angle < kPi ? 2 * kPi : angle;
 }
 
-// (quad/detail/layout.h)
-int node_quarters(const Surface& s, const Layout& layout, int h_out, int valence) {
-  if (layout.on_loop[s.from(h_out)]) return -1;
-  // The curves' halfedges leaving the node, counter-clockwise from h_out.
-  std::vector<int> spokes{h_out};
-  for (int g = h_out, guard = 0;; ++guard) {
-    int c = s.mesh.prev_halfedge_handle(s.mesh.halfedge_handle(g)).idx() ^ 1;
-    for (int turn = 0; layout.edge_curve[c >> 1] < 0 && c != g && turn < 256; ++turn)
-      c = s.mesh.prev_halfedge_handle(s.mesh.halfedge_handle(c)).idx() ^ 1;
-    if (c == g || guard > 64) return -1;  // one curve only, or lost
-    if (c == h_out) break;
-    spokes.push_back(c);
-    g = c;
-  }
-  // Read from the lowest halfedge on, so that every sector of the node is read from the
-  // same grid whichever one is asked for.
-  const int m = static_cast<int>(spokes.size());
-  const int start = static_cast<int>(std::min_element(spokes.begin(), spokes.end()) - spokes.begin());
-  std::vector<double> at{0};  // each curve's direction in quarter turns from the first's
-  for (int t = 0; t < m; ++t) {
-    const int g = spokes[(start + t) % m], next = spokes[(start + t + 1) % m];
-    at.push_back(at.back() + sector_angle(s, layout, g, next ^ 1, valence) / (kPi / 2));
-  }
-  const double total = at.back();
-  if (std::abs(total - std::round(total)) > 0.5 - 1e-9) return -1;
-  // The offset that puts the directions closest to the grid (one of them on it).
-  double offset = 0, best = 1e300;
-  for (int j = 0; j < m; ++j) {
-    const double o = std::round(at[j]) - at[j];
-    double miss = 0;
-    for (int k = 0; k < m; ++k) miss += std::abs(at[k] + o - std::round(at[k] + o));
-    if (miss < best - 1e-12) best = miss, offset = o;
-  }
-  const int t = (m - start) % m;  // h_out's place from the first
-  return static_cast<int>(std::lround(at[t + 1] + offset) - std::lround(at[t] + offset));
-}
-
 namespace {
 
 // The next patch-boundary halfedge after h: rotate around to(h) inside the patch.
@@ -196,95 +146,6 @@ int next_on_boundary(const Surface& s, const Layout& layout, int h) {
   for (int guard = 0; layout.edge_curve[c >> 1] < 0 && guard < 256; ++guard)
     c = s.mesh.next_halfedge_handle(s.mesh.halfedge_handle(c ^ 1)).idx();
   return c;
-}
-
-// The four corners of a disk patch among the nodes of its boundary cycle that best make a
-// rectangle: corner angles near a quarter turn, other nodes near straight, and the two
-// pairs of opposite sides of nearly equal length (in target edges, as quantization needs
-// them equal). A cusp (read 0) stays one and counts as two corners with an empty side
-// between them, so 4 − 2 · cusps corners are chosen. Exhaustive over the choices among the
-// m nodes (m ≤ 40 here). Returns the quarters of every node (0, 1 or 2), or nothing when
-// there are too few nodes or too many.
-std::vector<int> best_corners(const std::vector<Corner>& nodes, const std::vector<double>& after,
-                              double* best_cost) {
-  const int m = static_cast<int>(nodes.size());
-  int cusps = 0;
-  for (const Corner& k : nodes) cusps += k.quarters == 0;
-  const int wanted = 4 - 2 * cusps;
-  std::vector<int> best;
-  *best_cost = 1e300;
-  if (wanted < 0 || m - cusps < wanted || m > 40) return best;
-  std::vector<int> quarters(m, 2);
-  for (int i = 0; i < m; ++i)
-    if (nodes[i].quarters == 0) quarters[i] = 0;
-  auto cost_of = [&]() {
-    double cost = 0, side[4] = {0, 0, 0, 0};
-    int first = 0;
-    while (quarters[first] == 2) ++first;
-    for (int t = 0, k = -1; t < m; ++t) {
-      const int i = (first + t) % m;
-      const double want = quarters[i] * kPi / 2;
-      cost += std::abs(nodes[i].angle - want) / (kPi / 2);
-      k += quarters[i] < 2 ? 2 - quarters[i] : 0;
-      side[k] += after[i];
-    }
-    for (int k = 0; k < 2; ++k)
-      cost += 2 * std::abs(side[k] - side[k + 2]) / std::max(side[k] + side[k + 2], 1e-9);
-    return cost;
-  };
-  // Every choice of `left` more corners among the non-cusp nodes from index i on.
-  std::function<void(int, int)> choose = [&](int i, int left) {
-    if (left == 0) {
-      const double cost = cost_of();
-      if (cost < *best_cost) *best_cost = cost, best = quarters;
-      return;
-    }
-    for (int j = i; j <= m - left; ++j)
-      if (quarters[j] == 2) {
-        quarters[j] = 1;
-        choose(j + 1, left - 1);
-        quarters[j] = 2;
-      }
-  };
-  choose(0, wanted);
-  return best;
-}
-
-// A sector's quarter turns: its override, if any, else its reading. Once the rounds stall,
-// an override no longer hides a dangling end (build_patches).
-int read_with_override(const std::map<int, int>& quarter_override, const Corner& k, bool stalled) {
-  const auto o = quarter_override.find(k.halfedge_out);
-  return o != quarter_override.end() && !(stalled && k.read == 4) ? o->second : k.read;
-}
-
-// Whether a patch of one boundary cycle passes a vertex twice (a pinched disk).
-bool passes_a_vertex_twice(const Surface& s, const std::vector<Cycle>& cycles) {
-  if (cycles.size() != 1) return false;
-  std::vector<int> cv;
-  for (int h : cycles[0].halfedges) cv.push_back(s.from(h));
-  std::sort(cv.begin(), cv.end());
-  return std::adjacent_find(cv.begin(), cv.end()) != cv.end();
-}
-
-// How far a patch whose nodes read `quarters` is from a rectangle: Σ over its two pairs of
-// opposite sides of 2 |difference| / sum of their targets (`after`: the target of the arc
-// after each node), as best_corners weighs it; -1 if it does not turn 4.
-double side_imbalance(const std::vector<int>& quarters, const std::vector<double>& after) {
-  const int m = static_cast<int>(quarters.size());
-  int first = 0, turning = 0;
-  for (int q : quarters) turning += 2 - q;
-  while (first < m && quarters[first] == 2) ++first;
-  if (turning != 4 || first == m) return -1;
-  double side[4] = {0, 0, 0, 0};
-  for (int t = 0, k = -1; t < m; ++t) {
-    const int i = (first + t) % m;
-    k += quarters[i] < 2 ? 2 - quarters[i] : 0;
-    side[k] += after[i];
-  }
-  double imbalance = 0;
-  for (int k = 0; k < 2; ++k)
-    imbalance += 2 * std::abs(side[k] - side[k + 2]) / std::max(side[k] + side[k + 2], 1e-9);
-  return imbalance;
 }
 
 // Takes the stretch `vertices` (consecutive along one open curve, either way round) off the
@@ -375,83 +236,6 @@ std::size_t round_state(const Layout& layout, const std::map<int, int>& quarter_
   for (const auto& [h, quarters] : quarter_override) mix(static_cast<std::size_t>(h) * 8 + quarters);
   for (int f : wedge_tried) mix(static_cast<std::size_t>(f));
   return key;
-}
-
-// Per patch: its faces, and its cycles and Euler characteristic as read from the layout
-// (corner readings before overrides).
-struct Examined {
-  std::vector<int> faces;
-  long chi = 0;
-  std::vector<Cycle> cycles;
-};
-
-// The corners of every patch chosen at once (corners.cpp) before build_patches looks at
-// each alone: disks (one cycle, χ = 1, no vertex twice, no reflex or dangling reading) take
-// part; the others keep their readings and are cut. The choices go into quarter_override;
-// returns how many sectors it re-read.
-int read_corners_together(const Surface& s, const Layout& layout, const QuadOptions& options,
-                          const std::map<int, int>& singular_valence, const PatchLayout& out,
-                          const std::vector<Examined*>& patches, bool stalled,
-                          std::map<int, int>& quarter_override) {
-  std::vector<SectorChoice> sectors;
-  std::vector<int> sector_halfedge;
-  std::map<int, int> node_sum;  // Σ quarters as read, per node
-  const int n = static_cast<int>(patches.size());
-  for (int p = 0; p < n; ++p) {
-    Examined& patch = *patches[p];
-    bool disk =
-        patch.cycles.size() == 1 && patch.chi == 1 && !passes_a_vertex_twice(s, patch.cycles);
-    int turning = 0;
-    for (Cycle& c : patch.cycles)
-      for (Corner& k : c.nodes) {
-        k.quarters = read_with_override(quarter_override, k, stalled);
-        disk &= k.quarters <= 2;
-        turning += 2 - k.quarters;
-      }
-    const size_t first = sectors.size();
-    std::vector<int> quarters;
-    std::vector<double> after;  // target of the arc after each node
-    for (const Cycle& c : patch.cycles)
-      for (const Corner& k : c.nodes) {
-        SectorChoice sector;
-        sector.patch = disk ? p : -1;
-        sector.node = s.from(k.halfedge_out);
-        sector.angle = k.angle;
-        sector.quarters = k.quarters;
-        sector.free = k.quarters == 1 || k.quarters == 2;
-        sectors.push_back(sector);
-        sector_halfedge.push_back(k.halfedge_out);
-        node_sum[sector.node] += k.quarters;
-        quarters.push_back(k.quarters);
-        after.push_back(out.arcs[out.halfedge_arc[k.halfedge_out] / 2].target);
-      }
-    // A patch one corner off: what re-reading each sector alone does to its sides (the flow
-    // cannot weigh a rectangle's sides, which best_corners does: without this the joint
-    // reading left the 5 x 5 net's cage with 245 quads over 2.5x the target).
-    if (!disk || options.corner_side_weight <= 0 || std::abs(turning - 4) != 1) continue;
-    for (size_t i = 0; i < quarters.size(); ++i) {
-      if (!sectors[first + i].free) continue;
-      std::vector<int> changed = quarters;
-      changed[i] = 3 - changed[i];
-      sectors[first + i].side_cost =
-          options.corner_side_weight * std::max(0.0, side_imbalance(changed, after));
-    }
-  }
-  // What a node's sectors should add up to: a traced singularity's valence, 4 inside, and
-  // on a loop what they read (the boundary's own turn there).
-  std::map<int, int> target;
-  for (const auto& [v, sum] : node_sum) {
-    const auto singular = singular_valence.find(v);
-    target[v] = layout.on_loop[v] ? sum : singular != singular_valence.end() ? singular->second : 4;
-  }
-  const std::vector<int> chosen = choose_corners(sectors, n, target, options.corner_node_price);
-  int reread = 0;
-  for (size_t i = 0; i < sectors.size(); ++i)
-    if (chosen[i] != sectors[i].quarters) {
-      quarter_override[sector_halfedge[i]] = chosen[i];
-      ++reread;
-    }
-  return reread;
 }
 
 }  // namespace
@@ -721,8 +505,9 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                   ? node_quarters(s, layout, h_out,
                                   singular == singular_valence.end() ? 0 : singular->second)
                   : -1;
-          corner.quarters = std::clamp(together >= 0 ? together : int(std::lround(corner.angle / (kPi / 2))),
-                                       options.cusp_corners ? 0 : 1, 3);
+          const int alone = static_cast<int>(std::lround(corner.angle / (kPi / 2)));
+          corner.quarters =
+              std::clamp(together >= 0 ? together : alone, options.cusp_corners ? 0 : 1, 3);
           if (corner.quarters == 0 && layout.no_cusp.count(h_out)) corner.quarters = 1;
           if (h_out == (h_in ^ 1)) corner.quarters = 4;  // a dangling end: full turn
           cycle.nodes.push_back(corner);

@@ -228,6 +228,52 @@ struct PatchReading {
   std::unique_ptr<State> state;
 };
 
+// A patch's corner at a layout node: the sector of the patch between the boundary
+// halfedges leaving and entering the node, its angle and its quarter turns.
+struct Corner {
+  int halfedge_out;  // patch boundary halfedge leaving the node
+  int halfedge_in;   // patch boundary halfedge entering it
+  double angle;
+  int quarters;   // as used: the reading, or its override
+  int read = 2;   // the reading
+};
+
+struct Cycle {
+  std::vector<int> halfedges;  // patch on the left, in order
+  std::vector<Corner> nodes;   // nodes met along the cycle, in order
+};
+
+// Per patch: its faces, and its cycles and Euler characteristic as read from the layout
+// (corner readings before overrides).
+struct Examined {
+  std::vector<int> faces;
+  long chi = 0;
+  std::vector<Cycle> cycles;
+};
+
+// The four corners of a disk patch among the nodes of its boundary cycle that best make a
+// rectangle: corner angles near a quarter turn, other nodes near straight, and the two
+// pairs of opposite sides of nearly equal length (in target edges, as quantization needs
+// them equal). A cusp (read 0) stays one and counts as two corners with an empty side
+// between them, so 4 − 2 · cusps corners are chosen. Exhaustive over the choices among the
+// m nodes (m ≤ 40 here). Returns the quarters of every node (0, 1 or 2), or nothing when
+// there are too few nodes or too many.
+std::vector<int> best_corners(const std::vector<Corner>& nodes, const std::vector<double>& after,
+                              double* best_cost);
+// A sector's quarter turns: its override, if any, else its reading. Once the rounds stall,
+// an override no longer hides a dangling end (build_patches).
+int read_with_override(const std::map<int, int>& quarter_override, const Corner& k, bool stalled);
+// Whether a patch of one boundary cycle passes a vertex twice (a pinched disk).
+bool passes_a_vertex_twice(const Surface& s, const std::vector<Cycle>& cycles);
+// The corners of every patch chosen at once (corners.cpp) before build_patches looks at
+// each alone: disks (one cycle, χ = 1, no vertex twice, no reflex or dangling reading) take
+// part; the others keep their readings and are cut. The choices go into quarter_override;
+// returns how many sectors it re-read.
+int read_corners_together(const Surface& s, const Layout& layout, const QuadOptions& options,
+                          const std::map<int, int>& singular_valence, const PatchLayout& out,
+                          const std::vector<Examined*>& patches, bool stalled,
+                          std::map<int, int>& quarter_override);
+
 // One sector of a patch boundary at a layout node, for choose_corners.
 struct SectorChoice {
   int patch = -1;      // the patch (0 .. patches − 1), or -1: left out, its readings kept
