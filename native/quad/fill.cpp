@@ -36,7 +36,7 @@ Vec3 sample_arc(const Surface& s, const Arc& arc, double at) {
 }  // namespace
 
 QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& pl,
-                      Messages& messages) {
+                      Messages& messages, std::vector<int>* quad_patch) {
   QuadCage cage;
   cage.component = s.component;
   std::vector<Vec3> points;
@@ -232,6 +232,7 @@ QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout&
     for (int i = 0; i < A; ++i)
       for (int j = 0; j < B; ++j)
         quads.push_back({grid[i][j], grid[i + 1][j], grid[i + 1][j + 1], grid[i][j + 1]});
+    if (quad_patch) quad_patch->resize(quads.size(), static_cast<int>(&patch - pl.patches.data()));
   }
   if (unlocated)
     messages.warnings.push_back("component " + std::to_string(s.component) + ": " +

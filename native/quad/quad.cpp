@@ -514,6 +514,39 @@ struct AttemptWork {
   double traced = 0, quantized = 0, total = 0;
 };
 
+// The patches (indices into the layout's patches) that the quads of `cage` left turned
+// over or degenerate came from: each such quad's centre is matched to the nearest quad
+// centre of `filled`, the cage as fill_patches made it, whose patch `quad_patch` gives.
+std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const QuadCage& cage,
+                                   const QuadCage& filled, const std::vector<int>& quad_patch) {
+  auto centre = [](const QuadCage& of, int q) {
+    Vec3 sum = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) sum += of.vertices.row(of.quads(q, k)).transpose();
+    return Vec3(0.25 * sum);
+  };
+  std::vector<Vec3> filled_centres;
+  for (int q = 0; q < filled.quads.rows(); ++q) filled_centres.push_back(centre(filled, q));
+  std::set<int> patches;
+  for (int q = 0; q < cage.quads.rows(); ++q) {
+    Vec3 c[4];
+    bool degenerate = false;
+    for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+    for (int k = 0; k < 4; ++k)
+      degenerate |= cage.quads(q, k) == cage.quads(q, (k + 1) % 4) ||
+                    quad_detail::corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < 1;
+    if (!degenerate && !quad_detail::turned_over(checks.normals, checks.locator, c)) continue;
+    const Vec3 at = centre(cage, q);
+    int nearest = -1;
+    double best = 1e300;
+    for (size_t f = 0; f < filled_centres.size(); ++f) {
+      const double d = (filled_centres[f] - at).squaredNorm();
+      if (d < best) best = d, nearest = static_cast<int>(f);
+    }
+    if (nearest >= 0 && nearest < static_cast<int>(quad_patch.size())) patches.insert(quad_patch[nearest]);
+  }
+  return patches;
+}
+
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
 // is in `seen` (a layout an earlier choice already had), or once `dropped`. Reads only its
@@ -554,46 +587,76 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   quad_detail::PatchLayout patches;
   std::string failure;
   bool relaxed = false;
-  int merged = 0, straightened = 0;
-  quad_detail::Messages layout_messages;  // of the last round only
+  int merged = 0, straightened = 0, tangle_rounds = 0, tangle_patches = 0;
   // Each round changes the layout in a few places: only the patches there are read again.
   quad_detail::PatchReading reading;
-  for (int round = 0;; ++round) {
+  // A cage whose untangling leaves quads turned over (one tangle, as measured) has the
+  // patches those quads came from merged with a neighbour, and the layout quantized and
+  // filled again (QuadOptions::max_tangle_rounds).
+  for (int repair = 0;; ++repair) {
+    quad_detail::Messages layout_messages;  // of the last round only
+    for (int round = 0;; ++round) {
+      dropped.check();
+      layout_messages = {};
+      patches = quad_detail::build_patches(surface, layout, options, layout_messages, &reading);
+      const bool quantized = quad_detail::quantize(patches, options, &failure, &relaxed);
+      branching += static_cast<double>(patches.quantize_nodes) * static_cast<double>(patches.arcs.size());
+      if (quantized) break;
+      int now = 0, taken = 0;
+      // Cusp readings at an unbalanced patch are taken back first (always: they are
+      // readings, not changes to the layout); only where there are none are the patches
+      // merged.
+      const std::vector<int> unbalanced = quad_detail::unbalanced_patches(patches);
+      for (int p : unbalanced) taken += quad_detail::straighten_cusps(layout, patches, p);
+      if (!taken && round < options.max_balance_rounds)
+        for (int p : unbalanced) now += quad_detail::merge_patch(surface, layout, patches, p);
+      GENBREP_CHECK(now + taken > 0, Code::StageFailure,
+                    "quad: component " + std::to_string(c) + ": quantization of " +
+                        std::to_string(patches.patches.size()) + " patches: " + failure +
+                        (merged ? " (after merging " + std::to_string(merged) +
+                                      " unbalanced patches)"
+                                : std::string()));
+      merged += now;
+      straightened += taken;
+    }
+    if (repair == 0) {
+      // Different choices often give the same quantized layout: it is filled only once.
+      std::size_t fingerprint = patches.arcs.size();
+      for (const auto& arc : patches.arcs)
+        for (int value : {arc.vertices.front(), arc.vertices.back(), arc.count})
+          fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(value);
+      for (const auto& patch : patches.patches)
+        for (const auto& side : patch.sides)
+          for (const auto& [a, reversed] : side)
+            fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
+      keys->quantized = fingerprint;
+      work->quantized = work_so_far();
+      GENBREP_CHECK(!seen.count(fingerprint), Code::StageFailure, same_layout(c));
+    }
     dropped.check();
-    layout_messages = {};
-    patches = quad_detail::build_patches(surface, layout, options, layout_messages, &reading);
-    const bool quantized = quad_detail::quantize(patches, options, &failure, &relaxed);
-    branching += static_cast<double>(patches.quantize_nodes) * static_cast<double>(patches.arcs.size());
-    if (quantized) break;
-    int now = 0, taken = 0;
-    // Cusp readings at an unbalanced patch are taken back first (always: they are readings,
-    // not changes to the layout); only where there are none are the patches merged.
-    const std::vector<int> unbalanced = quad_detail::unbalanced_patches(patches);
-    for (int p : unbalanced) taken += quad_detail::straighten_cusps(layout, patches, p);
-    if (!taken && round < options.max_balance_rounds)
-      for (int p : unbalanced) now += quad_detail::merge_patch(surface, layout, patches, p);
-    GENBREP_CHECK(now + taken > 0, Code::StageFailure,
-                  "quad: component " + std::to_string(c) + ": quantization of " +
-                      std::to_string(patches.patches.size()) + " patches: " + failure +
-                      (merged ? " (after merging " + std::to_string(merged) +
-                                    " unbalanced patches)"
-                              : std::string()));
-    merged += now;
-    straightened += taken;
+    quad_detail::Messages filled_messages;  // of this fill only
+    std::vector<int> quad_patch;
+    *cage = quad_detail::fill_patches(surface, layout, patches, filled_messages, &quad_patch);
+    const QuadCage filled = *cage;
+    dropped.check();
+    if (const int doublets = quad_detail::remove_doublets(*cage))
+      filled_messages.notes.push_back("component " + std::to_string(c) + ": " +
+                                      std::to_string(doublets) +
+                                      " doublets (interior vertices of two quads) removed");
+    *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped);
+    std::set<int> tangled;  // the patches the quads left turned over came from
+    if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
+      tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);
+    int now = 0;
+    for (int p : tangled) now += quad_detail::merge_patch(surface, layout, patches, p);
+    if (!now) {
+      messages->append(layout_messages);
+      messages->append(filled_messages);
+      break;
+    }
+    ++tangle_rounds;
+    tangle_patches += now;
   }
-  // Different choices often give the same quantized layout: it is filled only once.
-  std::size_t fingerprint = patches.arcs.size();
-  for (const auto& arc : patches.arcs)
-    for (int value : {arc.vertices.front(), arc.vertices.back(), arc.count})
-      fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(value);
-  for (const auto& patch : patches.patches)
-    for (const auto& side : patch.sides)
-      for (const auto& [a, reversed] : side)
-        fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
-  keys->quantized = fingerprint;
-  work->quantized = work_so_far();
-  GENBREP_CHECK(!seen.count(fingerprint), Code::StageFailure, same_layout(c));
-  messages->append(layout_messages);
   if (merged)
     messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
                            " patches whose sides could not balance merged with a neighbour");
@@ -605,13 +668,12 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   if (relaxed)
     messages->notes.push_back("component " + std::to_string(c) +
                            ": the layout's sides balance only with some interior arcs at 0 edges");
-  dropped.check();
-  *cage = quad_detail::fill_patches(surface, layout, patches, *messages);
-  dropped.check();
-  if (const int doublets = quad_detail::remove_doublets(*cage))
-    messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(doublets) +
-                           " doublets (interior vertices of two quads) removed");
-  *stats = measure_untangled(surface, checks, cage, messages, dropped);
+  if (tangle_rounds)
+    messages->notes.push_back("component " + std::to_string(c) + ": " +
+                           std::to_string(tangle_patches) +
+                           " patches under quads the untangling left turned over merged with a "
+                           "neighbour and the layout filled again (" +
+                           std::to_string(tangle_rounds) + (tangle_rounds > 1 ? " rounds)" : " round)"));
   stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, kOversized);
   if (stats->oversized_quads) {
     char text[200];

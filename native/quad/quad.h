@@ -154,6 +154,9 @@ struct QuadOptions {
   bool cut_pinches = true;
   // Rounds of merging patches whose sides cannot balance, before quantization gives up.
   int max_balance_rounds = 8;
+  // Rounds of merging the patches under quads that the untangling left turned over (a
+  // tangle) with a neighbour and filling the layout again, before the layout choice fails.
+  int max_tangle_rounds = 3;
   // After the first layout choice whose cage meets issue 5's targets, further choices are
   // tried (the best cage is kept) as long as choices × the component's triangles (after
   // refinement) stays within this, counting only choices that traced a layout not seen

@@ -546,8 +546,9 @@ double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b);
 // remesh at `coarse_edge_length` split once (cage edges about half that long).
 QuadCage fallback_cage(const Surface& s, double coarse_edge_length);
 
-// Cage from the quantized layout.
+// Cage from the quantized layout. `quad_patch` (optional): per quad of the cage, the index
+// of the patch (in patches.patches) it fills.
 QuadCage fill_patches(const Surface& s, const Layout& layout, const PatchLayout& patches,
-                      Messages& messages);
+                      Messages& messages, std::vector<int>* quad_patch = nullptr);
 
 }  // namespace genbrep::quad_detail
