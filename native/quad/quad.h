@@ -29,9 +29,11 @@
 //      neighbour and the layout is rebuilt (a few rounds).
 //   4. repair: doublets left by collapsed sliver patches are removed; quads the filling
 //      squeezed or turned over are opened up by local smoothing on the surface, and a
-//      quad that stays folded has a diagonal collapsed. The cage must then be a 2-manifold
-//      with no doublet. Several layout choices are tried (reported); the fallback cage
-//      (a split coarse remesh) is the last resort.
+//      quad that stays folded has a diagonal collapsed; where quads stay turned over even
+//      so (a tangle), the patches they came from are merged with a neighbour and the
+//      layout quantized and filled again (a few rounds). The cage must then be a
+//      2-manifold with no doublet. Several layout choices are tried (reported); the
+//      fallback cage (a split coarse remesh) is the last resort.
 //   5. squaring: the kept cage's inner vertices of four quads move on the surface to bring
 //      its corners closer to square while keeping its rows even and its edge lengths
 //      (untangle.cpp square_cage); chains and irregular vertices stay. Choices are
