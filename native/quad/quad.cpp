@@ -195,6 +195,21 @@ QuadStats measure_cage(const QuadCage& cage, const TriMesh& design) {
 }
 
 namespace {
+// A quad with a corner twice, two corners at one point or a corner under 1°
+// (QuadStats::degenerate_quads).
+bool degenerate_quad(const QuadCage& cage, Eigen::Index q) {
+  Vec3 c[4];
+  bool degenerate = false;
+  for (int k = 0; k < 4; ++k) {
+    c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+    for (int j = 0; j < k; ++j) degenerate |= cage.quads(q, k) == cage.quads(q, j);
+  }
+  for (int k = 0; k < 4; ++k)
+    degenerate |= quad_detail::corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < 1 ||
+                  c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k];
+  return degenerate;
+}
+
 QuadStats measure(const QuadCage& cage, const quad_detail::DesignNormals& normals,
                   const quad_detail::ComponentLocator* locator) {
   QuadStats stats;
@@ -229,16 +244,12 @@ QuadStats measure(const QuadCage& cage, const quad_detail::DesignNormals& normal
   int corners = 0;
   for (Eigen::Index q = 0; q < cage.quads.rows(); ++q) {
     Vec3 c[4];
-    bool repeated = false;
-    for (int k = 0; k < 4; ++k) {
-      c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
-      for (int j = 0; j < k; ++j) repeated |= cage.quads(q, k) == cage.quads(q, j);
-    }
-    bool degenerate = repeated, skewed = false;
+    for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
+    const bool degenerate = degenerate_quad(cage, q);
+    bool skewed = false;
     for (int k = 0; k < 4; ++k) {
       const double angle =
           quad_detail::corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi;
-      degenerate |= angle < 1 || c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k];
       const double deviation = std::abs(angle - 90);
       skewed |= deviation > kSkewedDegrees;
       angle_sum += deviation;
@@ -529,12 +540,9 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
   std::set<int> patches;
   for (int q = 0; q < cage.quads.rows(); ++q) {
     Vec3 c[4];
-    bool degenerate = false;
     for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
-    for (int k = 0; k < 4; ++k)
-      degenerate |= cage.quads(q, k) == cage.quads(q, (k + 1) % 4) ||
-                    quad_detail::corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < 1;
-    if (!degenerate && !quad_detail::turned_over(checks.normals, checks.locator, c)) continue;
+    if (!degenerate_quad(cage, q) && !quad_detail::turned_over(checks.normals, checks.locator, c))
+      continue;
     const Vec3 at = centre(cage, q);
     int nearest = -1;
     double best = 1e300;
