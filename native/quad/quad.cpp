@@ -550,7 +550,7 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
       const double d = (filled_centres[f] - at).squaredNorm();
       if (d < best) best = d, nearest = static_cast<int>(f);
     }
-    if (nearest >= 0 && nearest < static_cast<int>(quad_patch.size())) patches.insert(quad_patch[nearest]);
+    if (nearest >= 0) patches.insert(quad_patch[nearest]);  // one entry per filled quad
   }
   return patches;
 }
