@@ -133,42 +133,62 @@ int oversized_quads(const CageChecks& checks, const QuadCage& cage, double densi
   return oversized;
 }
 
-int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
-                                const std::vector<SingularPoint>& singular, double density) {
-  const CageIncidence incidence(cage);
-  // Quarter turns each irregular vertex carries (4 − valence) and each singularity
-  // explains; nearest same-sign pairs (vertex, singularity) within reach first.
-  struct Pair { double distance; int vertex, point; };
-  std::vector<Pair> pairs;
-  std::vector<int> carries(cage.vertices.rows(), 0), left(singular.size());
-  for (size_t i = 0; i < singular.size(); ++i) left[i] = std::abs(singular[i].index);
-  for (int v = 0; v < static_cast<int>(cage.vertices.rows()); ++v) {
-    const int quads = static_cast<int>(incidence.quads_of[v].size());
-    if (incidence.on_chain[v] || quads == 4 || quads == 0) continue;
-    carries[v] = 4 - quads;
-    const Vec3 p = cage.vertices.row(v).transpose();
-    const int near = checks.normals.nearest_vertex(p);
-    double edges = 0;  // the vertex's mean edge length
-    for (int w : incidence.neighbours[v]) edges += (cage.vertices.row(w).transpose() - p).norm();
-    edges /= static_cast<double>(incidence.neighbours[v].size());
-    const double reach = kSingularReach *
-        std::max(edges, near >= 0 ? checks.surface.vertex_size[near] / density : 0);
-    for (size_t i = 0; i < singular.size(); ++i) {
-      const double distance = (singular[i].point - p).norm();
-      if (distance <= reach && singular[i].index * carries[v] > 0)
-        pairs.push_back({distance, v, static_cast<int>(i)});
-    }
+double singular_reach(const CageChecks& checks, const QuadCage& cage,
+                      const CageIncidence& incidence, int v, double density) {
+  const Vec3 p = cage.vertices.row(v).transpose();
+  const int near = checks.normals.nearest_vertex(p);
+  double edges = 0;  // the vertex's mean edge length
+  for (int w : incidence.neighbours[v]) edges += (cage.vertices.row(w).transpose() - p).norm();
+  if (!incidence.neighbours[v].empty()) edges /= static_cast<double>(incidence.neighbours[v].size());
+  return kSingularReach *
+         std::max(edges, near >= 0 ? checks.surface.vertex_size[near] / density : 0);
+}
+
+void explaining_pairs(const Irregular& irregular, int entry,
+                      const std::vector<SingularPoint>& singular, std::vector<Explaining>* pairs) {
+  for (size_t i = 0; i < singular.size(); ++i) {
+    const double distance = (singular[i].point - irregular.point).norm();
+    if (distance <= irregular.reach && singular[i].index * irregular.carries > 0)
+      pairs->push_back({distance, entry, static_cast<int>(i)});
   }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-    return std::tie(a.distance, a.vertex, a.point) < std::tie(b.distance, b.vertex, b.point);
+}
+
+void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& irregular,
+                 const std::vector<SingularPoint>& singular, std::vector<int>* carries) {
+  thread_local std::vector<int> left;
+  left.resize(singular.size());
+  for (size_t i = 0; i < singular.size(); ++i) left[i] = std::abs(singular[i].index);
+  carries->resize(irregular.size());
+  for (size_t e = 0; e < irregular.size(); ++e) (*carries)[e] = irregular[e].carries;
+  // Nearest pairs first.
+  std::sort(pairs.begin(), pairs.end(), [&](const Explaining& a, const Explaining& b) {
+    return std::tie(a.distance, irregular[a.entry].vertex, a.point) <
+           std::tie(b.distance, irregular[b.entry].vertex, b.point);
   });
-  for (const Pair& pair : pairs) {
-    int& carried = carries[pair.vertex];
+  for (const Explaining& pair : pairs) {
+    int& carried = (*carries)[pair.entry];
     const int explained = std::min(std::abs(carried), left[pair.point]);
     left[pair.point] -= explained;
     carried -= carried > 0 ? explained : -explained;
   }
-  return static_cast<int>(std::count_if(carries.begin(), carries.end(), [](int q) { return q != 0; }));
+}
+
+int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
+                                const std::vector<SingularPoint>& singular, double density) {
+  const CageIncidence incidence(cage);
+  std::vector<Irregular> irregular;
+  for (int v = 0; v < static_cast<int>(cage.vertices.rows()); ++v) {
+    const int quads = static_cast<int>(incidence.quads_of[v].size());
+    if (incidence.on_chain[v] || quads == 4 || quads == 0) continue;
+    irregular.push_back({v, 4 - quads, cage.vertices.row(v).transpose(),
+                         singular_reach(checks, cage, incidence, v, density)});
+  }
+  std::vector<Explaining> pairs;
+  for (size_t e = 0; e < irregular.size(); ++e)
+    explaining_pairs(irregular[e], static_cast<int>(e), singular, &pairs);
+  std::vector<int> left;
+  match_pairs(pairs, irregular, singular, &left);
+  return static_cast<int>(std::count_if(left.begin(), left.end(), [](int q) { return q != 0; }));
 }
 
 bool DesignNormals::flipped(const Vec3 (&c)[4]) const {
@@ -334,7 +354,9 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why);
 // it stays valid and its corners come closer to 90°.
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
-                            quad_detail::Messages* messages, const quad_detail::Dropped& dropped) {
+                            quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
+                            const std::vector<quad_detail::SingularPoint>* singular = nullptr,
+                            double density = 1) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
@@ -371,6 +393,31 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
       *cage = std::move(cancelled);
       stats = cancelled_stats;
       stats.collapsed_quads = folded;
+    }
+  }
+  // Irregular vertices beside a singularity that does not explain them (a −1 singularity
+  // drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by local
+  // edits; kept if the cage stays valid with fewer such vertices.
+  if (singular) {
+    QuadCage placed = *cage;
+    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density, 4, dropped)) {
+      const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
+      const int left = quad_detail::open_squeezed(checks, placed, 24);
+      const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
+      const int placed_off = quad_detail::irregular_off_singularities(checks, placed, *singular, density);
+      std::string why;
+      if (!left && !placed_stats.flipped_quads && !placed_stats.degenerate_quads &&
+          placed_off < off && cage_is_manifold(placed, &why)) {
+        messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
+                                  std::to_string(windows) +
+                                  " local edits moved irregular vertices onto the singularities "
+                                  "beside them (away from singularities " + std::to_string(off) +
+                                  " → " + std::to_string(placed_off) + ")");
+        const int folded = stats.collapsed_quads;
+        *cage = std::move(placed);
+        stats = placed_stats;
+        stats.collapsed_quads = folded;
+      }
     }
   }
   QuadCage relaxed = *cage;
@@ -560,6 +607,7 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
 // is in `seen` (a layout an earlier choice already had), or once `dropped`. Reads only its
 // arguments, so attempts run on several threads at once.
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
+                  const std::vector<quad_detail::SingularPoint>& singular,
                   const QuadOptions& options, const std::set<std::size_t>& seen, LayoutKeys* keys,
                   QuadCage* cage, QuadStats* stats, quad_detail::Messages* messages,
                   AttemptWork* work, const quad_detail::Dropped& dropped) {
@@ -651,7 +699,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
       filled_messages.notes.push_back("component " + std::to_string(c) + ": " +
                                       std::to_string(doublets) +
                                       " doublets (interior vertices of two quads) removed");
-    *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped);
+    *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped,
+                               options.place_irregulars ? &singular : nullptr, options.density);
     std::set<int> tangled;  // the patches the quads left turned over came from
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);
@@ -967,7 +1016,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
                      const quad_detail::Dropped& dropped) {
     try {
-      extract_once(surface, checks, variants[k].options, seen, &a->keys, &a->cage, &a->stats,
+      extract_once(surface, checks, singular, variants[k].options, seen, &a->keys, &a->cage, &a->stats,
                    &a->messages, &a->work, dropped);
       a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
           checks, a->cage, singular, variants[k].options.density);

@@ -32,7 +32,12 @@
 //      quad that stays folded has a diagonal collapsed; where quads stay turned over even
 //      so (a tangle), the patches they came from are merged with a neighbour and the
 //      layout quantized and filled again (a few rounds). The cage must then be a
-//      2-manifold with no doublet. Several layout choices are tried (reported); the
+//      2-manifold with no doublet. Irregular vertices left in ± pairs are cancelled by
+//      diagonal collapses, edge rotations and vertex splits; then those no field
+//      singularity explains (a −1 singularity drawn as a 6 and a 3, a 3–5 pair beside a
+//      5) are edited onto the singularities beside them or away: per such vertex the best
+//      sequence of at most two of those edits in a window of a few rings (place.cpp).
+//      Several layout choices are tried (reported); the
 //      fallback cage (a split coarse remesh) is the last resort.
 //   5. squaring: the kept cage's inner vertices of four quads move on the surface to bring
 //      its corners closer to square while keeping its rows even and its edge lengths
@@ -98,6 +103,11 @@ struct QuadOptions {
   // at three voxel sizes (bench/quad_sweep) irregular vertices off singularities 1492 ->
   // 1445, skewed quads 6248 -> 5928.
   bool node_readings = true;
+  // Irregular vertices the layout leaves beside a singularity that does not explain them
+  // (a −1 singularity drawn as a 6 and a 3, a 3–5 pair beside a 5) are moved onto it by
+  // local connectivity edits (quad_detail::place_irregulars), kept if the cage stays valid
+  // with fewer of them.
+  bool place_irregulars = true;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make

@@ -25,6 +25,17 @@ double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b) {
   return std::atan2(u.cross(w).norm(), u.dot(w));
 }
 
+bool corners_bad(const ComponentLocator& locator, const DesignNormals& normals,
+                 const Vec3 (&c)[4], double min_corner_degrees, int* hint) {
+  constexpr double kDegrees = 180 / 3.14159265358979323846;
+  for (int k = 0; k < 4; ++k) {
+    if (c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k]) return true;
+    if (corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * kDegrees < min_corner_degrees)
+      return true;
+  }
+  return turned_over(normals, locator, c, hint);
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -55,12 +66,7 @@ bool quad_is_bad(const ComponentLocator& locator, const DesignNormals& normals,
                  const QuadCage& cage, int q, double min_corner_degrees, int* hint = nullptr) {
   Vec3 c[4];
   for (int k = 0; k < 4; ++k) c[k] = cage.vertices.row(cage.quads(q, k)).transpose();
-  for (int k = 0; k < 4; ++k) {
-    if (c[(k + 1) % 4] == c[k] || c[(k + 3) % 4] == c[k]) return true;
-    if (corner_angle(c[k], c[(k + 1) % 4], c[(k + 3) % 4]) * 180 / kPi < min_corner_degrees)
-      return true;
-  }
-  return turned_over(normals, locator, c, hint);
+  return corners_bad(locator, normals, c, min_corner_degrees, hint);
 }
 
 // The smoothing repair; returns the vertices it moved and leaves the best cage it saw.
@@ -805,6 +811,12 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
     total += now;
   }
   return total;
+}
+
+int open_squeezed(const CageChecks& checks, QuadCage& cage, int max_rounds) {
+  std::vector<int> bad;
+  smooth_cage(checks.locator, checks.normals, cage, max_rounds, kMinCornerDegrees, &bad);
+  return static_cast<int>(bad.size());
 }
 
 int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed,

@@ -433,6 +433,31 @@ constexpr double kSingularReach = 2.0;
 // valence-5 vertex beside one, is not explained. O(irregular × singular).
 int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
                                 const std::vector<SingularPoint>& singular, double density);
+// An irregular interior cage vertex as irregular_off_singularities matches it: the quarter
+// turns it carries (4 − valence), where it is, and how far a singularity explains it.
+struct Irregular {
+  int vertex;  // ties between equal distances go by vertex, then singularity
+  int carries;
+  Vec3 point;
+  double reach;
+};
+// kSingularReach × (the vertex's mean edge, or the local target edge if longer).
+double singular_reach(const CageChecks& checks, const QuadCage& cage,
+                      const CageIncidence& incidence, int v, double density);
+// A singularity of the same sign within reach of an irregular vertex (`entry`: its index
+// in the list matched).
+struct Explaining {
+  double distance;
+  int entry, point;
+};
+// Appends the singularities that can explain `irregular` (entry `entry`) to `pairs`.
+void explaining_pairs(const Irregular& irregular, int entry,
+                      const std::vector<SingularPoint>& singular, std::vector<Explaining>* pairs);
+// irregular_off_singularities' matching of `pairs` (sorted here): nearest first, each
+// singularity explaining at most |index| quarter turns. Per entry of `irregular`, the
+// quarter turns left unexplained (0: explained), into `carries`.
+void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& irregular,
+                 const std::vector<SingularPoint>& singular, std::vector<int>* carries);
 
 // measure_cage (quad.h) with the design's normals already built.
 QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
@@ -488,6 +513,17 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 // rotations and splits (0: the cage is unchanged).
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
                            const Dropped& dropped = Dropped());
+// Moves irregular vertices no singularity explains (irregular_off_singularities) onto the
+// singularities beside them: around each, the sequence of at most two edits (edge
+// rotation, diagonal collapse, vertex split of a vertex of 5–8 quads; none at a chain or
+// crease vertex) within a few rings that leaves the fewest unexplained vertices, then the
+// fewest irregular ones, is made if it leaves fewer unexplained (place.cpp). Windows
+// edited in one round are disjoint; at most `max_rounds` rounds. Merged and split vertices
+// are placed (onto the component), no other moves: the caller opens squeezed quads.
+// Returns the windows edited (0: the cage is unchanged).
+int place_irregulars(const CageChecks& checks, QuadCage& cage,
+                     const std::vector<SingularPoint>& singular, double density, int max_rounds,
+                     const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
@@ -525,6 +561,13 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
 // goes and the two quads become one. Returns how many (collapsed sliver patches leave
 // them; the limit surface folds at a doublet).
 int remove_doublets(QuadCage& cage);
+// Whether a quad with corners `c` has a corner under `min_corner_degrees` (or two corners
+// at one point), or is turned over (turned_over). *hint as in ComponentLocator::closest.
+bool corners_bad(const ComponentLocator& locator, const DesignNormals& normals,
+                 const Vec3 (&c)[4], double min_corner_degrees, int* hint = nullptr);
+// Smooths the interior vertices around squeezed (a corner under 5°) or turned-over quads,
+// as the untangling does, for at most `max_rounds` rounds; returns how many stay so.
+int open_squeezed(const CageChecks& checks, QuadCage& cage, int max_rounds);
 // Quads still bad after smoothing get a diagonal collapsed (when the link condition allows)
 // and the smoothing is repeated; `collapsed` counts them (each leaves irregular vertices).
 int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int* collapsed,

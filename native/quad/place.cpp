@@ -1,0 +1,518 @@
+// quad/place.cpp — irregular vertices the layout left beside the field's singularities
+// are edited onto them, or away (quad/quad.h step 4, after the pair cancelling of
+// untangle.cpp). Around each irregular vertex no singularity explains
+// (irregular_off_singularities' matching), every sequence of at most two edits — an edge
+// rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
+// the window's connectivity alone (the first edit changing an irregular vertex, the
+// second one of the vertices the first changed); of those leaving fewer unexplained
+// vertices, the best few (fewest unexplained, then fewest irregular) are evened out in
+// turn around their changed vertices, and the first whose quads come out neither
+// squeezed nor turned over is made. Such defects are a −1 singularity drawn as a 6 and a
+// 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one edge off);
+// one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of the cage
+// found 2 of 49 with one edit, 25 with two). The caller opens squeezed quads and evens
+// the whole cage out.
+// Complexity: per unexplained vertex, (edits in the window)² window-sized steps; windows
+// searched in vain are not searched again until an edit touches them.
+#include <algorithm>
+#include <array>
+#include <map>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include "quad/detail/layout.h"
+
+namespace genbrep::quad_detail {
+
+namespace {
+
+constexpr int kCoreRings = 1;    // first edits: quads at vertices this close to the vertex
+constexpr int kScoreRings = 4;   // vertices counted; every edit's changed vertices lie here
+constexpr int kWindowRings = 5;  // the window: quads at vertices this close
+constexpr int kMaxSplitValence = 8;
+// An edit whose quads come out with a corner under this (or turned over) is not made.
+constexpr double kMinPlacedCorner = 5.0;
+// Improving sequences kept per window, tried best first until one settles.
+constexpr size_t kKeptSequences = 6;
+// Sweeps evening out an edit's vertices and their neighbours (settle).
+constexpr int kSettleSweeps = 3;
+
+// A window's connectivity after some edits, in local vertex ids.
+struct State {
+  std::vector<std::array<int, 4>> quads;  // quads[i][0] == -1: removed
+  std::vector<int> origin;                // per quad: the cage's quad, or -1 (added)
+  std::vector<int> valence, ring;         // per local vertex (ring: from the vertex)
+  std::vector<char> fixed;                // on a chain or a crease edge
+  std::vector<Vec3> point;
+  std::vector<double> reach;
+  std::vector<int> changed;               // vertices whose valence an edit changed
+};
+
+// Directed edge (a, b) → quad * 4 + k, sorted for lookups.
+struct Halfedges {
+  explicit Halfedges(const State& s) : n(static_cast<long long>(s.valence.size())) {
+    for (size_t q = 0; q < s.quads.size(); ++q)
+      if (s.quads[q][0] >= 0)
+        for (int k = 0; k < 4; ++k)
+          list.push_back({s.quads[q][k] * n + s.quads[q][(k + 1) % 4], static_cast<int>(q * 4 + k)});
+    std::sort(list.begin(), list.end());
+  }
+  int find(int a, int b) const {  // quad * 4 + k, or -1
+    const auto it = std::lower_bound(list.begin(), list.end(), std::pair<long long, int>{a * n + b, -1});
+    return it != list.end() && it->first == a * n + b ? it->second : -1;
+  }
+  bool joined(int a, int b) const { return find(a, b) >= 0 || find(b, a) >= 0; }
+  long long n;
+  std::vector<std::pair<long long, int>> list;
+};
+
+// Edits a state in place and takes them back (each edit is tried, scored and undone).
+class Editor {
+ public:
+  explicit Editor(State& s)
+      : s_(s), quads_(s.quads.size()), vertices_(s.valence.size()), changed_(s.changed.size()) {}
+  void set_quad(int q, const std::array<int, 4>& c) {
+    quad_log_.push_back({q, s_.quads[q]});
+    s_.quads[q] = c;
+  }
+  void add_quad(const std::array<int, 4>& c) { s_.quads.push_back(c), s_.origin.push_back(-1); }
+  // Call before changing v's valence, point or reach.
+  void touch(int v) {
+    vertex_log_.push_back({v, s_.valence[v], s_.point[v], s_.reach[v]});
+    if (std::find(s_.changed.begin(), s_.changed.end(), v) == s_.changed.end())
+      s_.changed.push_back(v);
+  }
+  int add_vertex(int valence, int ring, const Vec3& point, double reach) {
+    const int v = static_cast<int>(s_.valence.size());
+    s_.valence.push_back(valence), s_.ring.push_back(ring), s_.fixed.push_back(0);
+    s_.point.push_back(point), s_.reach.push_back(reach), s_.changed.push_back(v);
+    return v;
+  }
+  void undo() {
+    for (auto it = quad_log_.rbegin(); it != quad_log_.rend(); ++it) s_.quads[it->first] = it->second;
+    for (auto it = vertex_log_.rbegin(); it != vertex_log_.rend(); ++it) {
+      const auto& [v, valence, point, reach] = *it;
+      s_.valence[v] = valence, s_.point[v] = point, s_.reach[v] = reach;
+    }
+    s_.quads.resize(quads_), s_.origin.resize(quads_);
+    s_.valence.resize(vertices_), s_.ring.resize(vertices_), s_.fixed.resize(vertices_);
+    s_.point.resize(vertices_), s_.reach.resize(vertices_);
+    s_.changed.resize(changed_);
+  }
+
+ private:
+  State& s_;
+  size_t quads_, vertices_, changed_;
+  std::vector<std::pair<int, std::array<int, 4>>> quad_log_;
+  std::vector<std::tuple<int, int, Vec3, double>> vertex_log_;
+};
+
+// Makes every single edit of `s` on quads with a corner in `focus` in turn, calls `take`
+// on the edited state, and takes the edit back.
+template <class Take>
+void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
+  const Halfedges he(s);
+  const int nq = static_cast<int>(s.quads.size());
+  std::vector<std::vector<int>> quads_at(s.valence.size());
+  for (int q = 0; q < nq; ++q)
+    if (s.quads[q][0] >= 0)
+      for (int v : s.quads[q]) quads_at[v].push_back(q);
+  auto in_focus = [&](int q) {
+    if (s.quads[q][0] < 0) return false;
+    for (int v : s.quads[q]) if (focus[v]) return true;
+    return false;
+  };
+  auto movable = [&](int v) { return !s.fixed[v] && s.ring[v] <= kScoreRings; };
+  std::vector<int> splittable;
+  for (int q = 0; q < nq; ++q) {
+    if (!in_focus(q)) continue;
+    const std::array<int, 4> c = s.quads[q];
+    for (int v : c) splittable.push_back(v);
+    // Edge rotations: u–w between (u, w, a, b) and (w, u, c, d) becomes c–a or d–b.
+    for (int k = 0; k < 4; ++k) {
+      const int u = c[k], w = c[(k + 1) % 4];
+      if (!movable(u) || !movable(w) || s.valence[u] < 4 || s.valence[w] < 4) continue;
+      const int h = he.find(w, u);
+      if (h < 0 || (u > w && in_focus(h / 4))) continue;  // each edge once
+      const int q2 = h / 4, k2 = h % 4;
+      const int a = c[(k + 2) % 4], b = c[(k + 3) % 4];
+      const int cc = s.quads[q2][(k2 + 2) % 4], d = s.quads[q2][(k2 + 3) % 4];
+      const std::array<int, 6> hexagon = {u, cc, d, w, a, b};
+      bool distinct = true;
+      for (int i = 0; i < 6; ++i)
+        for (int j = i + 1; j < 6; ++j) distinct &= hexagon[i] != hexagon[j];
+      if (!distinct) continue;
+      for (int r = 0; r < 2; ++r) {
+        const int x = r == 0 ? cc : d, y = r == 0 ? a : b;
+        if (!movable(x) || !movable(y) || he.joined(x, y)) continue;
+        Editor edit(s);
+        if (r == 0) edit.set_quad(q, {cc, d, w, a}), edit.set_quad(q2, {a, b, u, cc});
+        else edit.set_quad(q, {d, w, a, b}), edit.set_quad(q2, {b, u, cc, d});
+        for (int v : {u, w, x, y}) edit.touch(v);
+        --s.valence[u], --s.valence[w], ++s.valence[x], ++s.valence[y];
+        take();
+        edit.undo();
+      }
+    }
+    // Diagonal collapses: p0 and p2 merge (valence a + c − 2 ≤ 6), p1 and p3 keep ≥ 3 quads.
+    for (int k = 0; k < 2; ++k) {
+      const int p0 = c[k], p1 = c[k + 1], p2 = c[k + 2], p3 = c[(k + 3) % 4];
+      if (!movable(p0) || !movable(p1) || !movable(p2) || !movable(p3)) continue;
+      if (s.valence[p0] + s.valence[p2] - 2 > 6 || s.valence[p1] < 4 || s.valence[p3] < 4) continue;
+      if (he.joined(p0, p2)) continue;
+      // The link condition: p0 and p2 share no neighbour but p1 and p3, and no other quad.
+      std::set<int> around0;
+      bool linked = false;
+      for (int r : quads_at[p0]) {
+        if (r == q) continue;
+        const auto& e = s.quads[r];
+        linked |= std::count(e.begin(), e.end(), p2) > 0;
+        for (int j = 0; j < 4; ++j)
+          if (e[j] == p0) around0.insert(e[(j + 1) % 4]), around0.insert(e[(j + 3) % 4]);
+      }
+      for (int r : quads_at[p2]) {
+        if (r == q || linked) continue;
+        const auto& e = s.quads[r];
+        for (int j = 0; j < 4; ++j)
+          if (e[j] == p2)
+            for (int n : {e[(j + 1) % 4], e[(j + 3) % 4]})
+              linked |= n != p1 && n != p3 && around0.count(n);
+      }
+      if (linked) continue;
+      Editor edit(s);
+      for (int v : {p0, p1, p2, p3}) edit.touch(v);
+      edit.set_quad(q, {-1, -1, -1, -1});
+      for (int r : quads_at[p2]) {
+        if (r == q) continue;
+        std::array<int, 4> e = s.quads[r];
+        for (int& v : e) if (v == p2) v = p0;
+        edit.set_quad(r, e);
+      }
+      s.valence[p0] += s.valence[p2] - 2, s.valence[p2] = 0;
+      --s.valence[p1], --s.valence[p3];
+      s.point[p0] = 0.5 * (s.point[p0] + s.point[p2]);
+      s.reach[p0] = 0.5 * (s.reach[p0] + s.reach[p2]);
+      take();
+      edit.undo();
+    }
+  }
+  // Vertex splits: u of n ≥ 5 quads keeps m of them (2 ≤ m ≤ n − 2), a new vertex w takes
+  // the others, and the quad (p, u, q, w) goes between.
+  std::sort(splittable.begin(), splittable.end());
+  splittable.erase(std::unique(splittable.begin(), splittable.end()), splittable.end());
+  for (int u : splittable) {
+    const int n = s.valence[u];
+    if (!movable(u) || s.ring[u] >= kScoreRings || n < 5 || n > kMaxSplitValence) continue;
+    if (static_cast<int>(quads_at[u].size()) != n) continue;
+    // The fan of u in order: quad j runs from after[j] (after u) to before[j].
+    std::vector<int> fan, after, before;
+    for (int r : quads_at[u])
+      for (int k = 0; k < 4; ++k)
+        if (s.quads[r][k] == u) {
+          fan.push_back(r);
+          after.push_back(s.quads[r][(k + 1) % 4]);
+          before.push_back(s.quads[r][(k + 3) % 4]);
+        }
+    std::vector<int> order = {0};
+    while (static_cast<int>(order.size()) < n) {
+      int next = -1;
+      for (int j = 0; j < n; ++j)
+        if (after[j] == before[order.back()]) next = j;
+      if (next <= 0) break;
+      order.push_back(next);
+    }
+    if (static_cast<int>(order.size()) != n || before[order.back()] != after[order[0]]) continue;
+    for (int i = 0; i < n; ++i)
+      for (int m = 2; m <= n - 2; ++m) {
+        const int p = after[order[i]], pq = after[order[(i + m) % n]];
+        if (p == pq || !movable(p) || !movable(pq) || he.joined(p, pq)) continue;
+        Editor edit(s);
+        const Vec3 at = s.point[u];
+        Vec3 side[2] = {Vec3::Zero(), Vec3::Zero()};
+        for (int j = 0; j < n; ++j) {
+          const int r = fan[order[j]];
+          for (int k = 0; k < 4; ++k) side[((j - i + n) % n) < m ? 0 : 1] += s.point[s.quads[r][k]];
+        }
+        for (int v : {u, p, pq}) edit.touch(v);
+        const int w = edit.add_vertex(n - m + 1, s.ring[u],
+                                      at + (side[1] / (4.0 * (n - m)) - at) / 3, s.reach[u]);
+        for (int j = 0; j < n; ++j)
+          if (((j - i + n) % n) >= m) {
+            const int r = fan[order[j]];
+            std::array<int, 4> e = s.quads[r];
+            for (int& v : e) if (v == u) v = w;
+            edit.set_quad(r, e);
+          }
+        edit.add_quad({p, u, pq, w});
+        s.valence[u] = m + 1;
+        ++s.valence[p], ++s.valence[pq];
+        s.point[u] = at + (side[0] / (4.0 * m) - at) / 3;
+        take();
+        edit.undo();
+      }
+  }
+}
+
+// Unexplained vertices, then irregular ones, among the scored vertices (`scored`: the
+// window's vertices within kScoreRings and not on a chain; vertices added since are too).
+// `explains`: per window vertex, the singularities near enough to explain it where it was
+// (an edit's changed vertices are looked up again).
+std::pair<int, int> score(const State& s, const std::vector<SingularPoint>& singular,
+                          const std::vector<int>& scored, size_t window_vertices,
+                          const std::vector<std::vector<Explaining>>& explains) {
+  thread_local std::vector<Irregular> irregular;
+  thread_local std::vector<Explaining> pairs;
+  thread_local std::vector<int> left;
+  irregular.clear(), pairs.clear();
+  auto add = [&](int v) {
+    if (s.valence[v] == 0 || s.valence[v] == 4) return;
+    const int entry = static_cast<int>(irregular.size());
+    irregular.push_back({v, 4 - s.valence[v], s.point[v], s.reach[v]});
+    if (static_cast<size_t>(v) < window_vertices &&
+        std::find(s.changed.begin(), s.changed.end(), v) == s.changed.end()) {
+      for (const Explaining& x : explains[v])
+        if (singular[x.point].index * irregular.back().carries > 0)
+          pairs.push_back({x.distance, entry, x.point});
+    } else {
+      explaining_pairs(irregular.back(), entry, singular, &pairs);
+    }
+  };
+  for (int v : scored) add(v);
+  for (size_t v = window_vertices; v < s.valence.size(); ++v) add(static_cast<int>(v));
+  match_pairs(pairs, irregular, singular, &left);
+  return {static_cast<int>(std::count_if(left.begin(), left.end(), [](int q) { return q != 0; })),
+          static_cast<int>(irregular.size())};
+}
+
+// Evens out the changed vertices of `s` and their neighbours (kSettleSweeps sweeps: each
+// to the mean of its neighbours, onto the component) and tells whether the quads around
+// them are then neither squeezed (a corner under kMinPlacedCorner) nor turned over.
+// `moved`: the vertices whose points changed.
+bool settle(const CageChecks& checks, State& s, std::vector<int>* moved) {
+  std::vector<std::vector<int>> neighbours(s.valence.size());
+  for (const auto& c : s.quads)
+    if (c[0] >= 0)
+      for (int k = 0; k < 4; ++k)
+        neighbours[c[k]].push_back(c[(k + 1) % 4]), neighbours[c[(k + 1) % 4]].push_back(c[k]);
+  std::vector<char> moving(s.valence.size(), 0);
+  moved->clear();
+  for (int v : s.changed) {
+    if (s.valence[v] == 0) continue;
+    for (int w : neighbours[v]) moving[w] = !s.fixed[w] && s.ring[w] <= kScoreRings;
+    moving[v] = 1;
+  }
+  for (size_t v = 0; v < moving.size(); ++v)
+    if (moving[v]) moved->push_back(static_cast<int>(v));
+  for (int sweep = 0; sweep < kSettleSweeps; ++sweep)
+    for (int v : *moved) {
+      Vec3 mean = Vec3::Zero();
+      for (int w : neighbours[v]) mean += s.point[w];
+      mean /= static_cast<double>(neighbours[v].size());
+      Vec3 normal;
+      s.point[v] = checks.locator.closest(mean, &normal);
+    }
+  for (const auto& c : s.quads) {
+    if (c[0] < 0 || !(moving[c[0]] || moving[c[1]] || moving[c[2]] || moving[c[3]])) continue;
+    const Vec3 corner[4] = {s.point[c[0]], s.point[c[1]], s.point[c[2]], s.point[c[3]]};
+    if (corners_bad(checks.locator, checks.normals, corner, kMinPlacedCorner)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int place_irregulars(const CageChecks& checks, QuadCage& cage,
+                     const std::vector<SingularPoint>& singular, double density, int max_rounds,
+                     const Dropped& dropped) {
+  int total = 0;
+  // Vertices whose window was searched in vain and has not changed since: not again.
+  std::vector<char> vain(cage.vertices.rows(), 0);
+  for (int round = 0; round < max_rounds; ++round) {
+    dropped.check();
+    const CageIncidence incidence(cage);
+    const int nv = static_cast<int>(cage.vertices.rows());
+    std::vector<char> fixed = incidence.on_chain;
+    for (const auto& e : cage.crease_edges) fixed[e[0]] = fixed[e[1]] = 1;
+    std::vector<double> reach(nv, -1);
+    auto reach_of = [&](int v) {
+      if (reach[v] < 0) reach[v] = singular_reach(checks, cage, incidence, v, density);
+      return reach[v];
+    };
+    // The unexplained vertices, as the measure finds them.
+    std::vector<Irregular> irregular;
+    for (int v = 0; v < nv; ++v) {
+      const int quads = static_cast<int>(incidence.quads_of[v].size());
+      if (incidence.on_chain[v] || quads == 4 || quads == 0) continue;
+      irregular.push_back({v, 4 - quads, cage.vertices.row(v).transpose(), reach_of(v)});
+    }
+    std::vector<Explaining> pairs;
+    for (size_t e = 0; e < irregular.size(); ++e)
+      explaining_pairs(irregular[e], static_cast<int>(e), singular, &pairs);
+    std::vector<int> left;
+    match_pairs(pairs, irregular, singular, &left);
+    // The cage as edited this round: quads (removed: -1), vertices appended.
+    std::vector<std::array<int, 4>> quads(cage.quads.rows());
+    for (int q = 0; q < cage.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) quads[q][k] = cage.quads(q, k);
+    std::vector<Vec3> points(nv);
+    for (int v = 0; v < nv; ++v) points[v] = cage.vertices.row(v).transpose();
+    std::vector<char> locked(nv, 0);
+    std::vector<int> ring(nv, -1);
+    int now = 0;
+    std::vector<std::vector<int>> searched;  // the windows searched in vain (vertex first)
+    for (size_t e = 0; e < irregular.size(); ++e) {
+      if (!left[e] || vain[irregular[e].vertex]) continue;
+      dropped.check();
+      // The window: rings around the vertex by breadth-first search.
+      std::vector<int> reached = {irregular[e].vertex};
+      ring[reached[0]] = 0;
+      for (size_t i = 0; i < reached.size(); ++i) {
+        const int v = reached[i];
+        if (ring[v] == kWindowRings) continue;
+        for (int w : incidence.neighbours[v])
+          if (ring[w] < 0) ring[w] = ring[v] + 1, reached.push_back(w);
+      }
+      std::set<int> window_quads;
+      for (int v : reached) window_quads.insert(incidence.quads_of[v].begin(), incidence.quads_of[v].end());
+      // Windows edited in one round share no quad and no vertex.
+      bool free = true;
+      for (int q : window_quads)
+        for (int v : quads[q]) free &= !locked[v];
+      State s;
+      std::map<int, int> local;
+      auto local_id = [&](int v) {
+        auto [it, added] = local.emplace(v, static_cast<int>(s.valence.size()));
+        if (added) {
+          s.valence.push_back(static_cast<int>(incidence.quads_of[v].size()));
+          s.ring.push_back(ring[v] >= 0 ? ring[v] : kWindowRings + 1);
+          s.fixed.push_back(fixed[v]);
+          s.point.push_back(points[v]);
+          s.reach.push_back(reach_of(v));
+        }
+        return it->second;
+      };
+      if (free)
+        for (int q : window_quads) {
+          std::array<int, 4> c;
+          for (int k = 0; k < 4; ++k) c[k] = local_id(quads[q][k]);
+          s.quads.push_back(c);
+          s.origin.push_back(q);
+        }
+      std::vector<int> global(local.size());
+      for (const auto& [g, l] : local) global[l] = g;
+      for (int v : reached) ring[v] = -1;
+      if (!free) continue;
+      std::vector<int> scored;
+      for (size_t l = 0; l < s.valence.size(); ++l)
+        if (s.ring[l] <= kScoreRings && !incidence.on_chain[global[l]]) scored.push_back(static_cast<int>(l));
+      const size_t window_vertices = s.valence.size();
+      // The singularities that can explain a vertex of the window.
+      const Vec3 centre = irregular[e].point;
+      double extent = 0;
+      for (size_t l = 0; l < s.point.size(); ++l)
+        extent = std::max(extent, (s.point[l] - centre).norm() + s.reach[l]);
+      std::vector<SingularPoint> near;
+      for (const auto& point : singular)
+        if ((point.point - centre).norm() <= extent) near.push_back(point);
+      std::vector<std::vector<Explaining>> explains(s.valence.size());
+      for (size_t l = 0; l < explains.size(); ++l)
+        for (int sign : {1, -1})  // either sign: what the vertex carries changes with edits
+          explaining_pairs({static_cast<int>(l), sign, s.point[l], s.reach[l]}, -1, near, &explains[l]);
+      // Every sequence of one or two edits; the second at the first one's vertices. The
+      // kKeptSequences best that leave fewer unexplained vertices are kept, best first.
+      const std::pair<int, int> before = score(s, near, scored, window_vertices, explains);
+      std::vector<std::pair<std::pair<int, int>, State>> kept;
+      auto keep = [&](const std::pair<int, int>& now) {
+        if (now.first >= before.first) return;
+        if (kept.size() == kKeptSequences && !(now < kept.back().first)) return;
+        const auto at = std::upper_bound(kept.begin(), kept.end(), now,
+                                         [](const auto& x, const auto& y) { return x < y.first; });
+        kept.insert(at, {now, s});
+        if (kept.size() > kKeptSequences) kept.pop_back();
+      };
+      std::vector<char> focus(s.valence.size(), 0);
+      for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
+      const std::vector<int> start = s.valence;
+      for_each_edit(s, focus, [&] {
+        // The first edit changes an irregular vertex.
+        if (std::none_of(s.changed.begin(), s.changed.end(), [&](int v) {
+              return v < static_cast<int>(start.size()) && start[v] != 4;
+            }))
+          return;
+        keep(score(s, near, scored, window_vertices, explains));
+        std::vector<char> at_first(s.valence.size(), 0);
+        for (int v : s.changed) at_first[v] = 1;
+        for_each_edit(s, at_first, [&] { keep(score(s, near, scored, window_vertices, explains)); });
+      });
+      // The first whose quads, evened out around the changed vertices, are not squeezed or
+      // turned over.
+      State* chosen = nullptr;
+      std::vector<int> moved;
+      for (auto& [at, state] : kept)
+        if (settle(checks, state, &moved)) {
+          chosen = &state;
+          break;
+        }
+      if (!chosen) {
+        searched.push_back(global);
+        std::swap(searched.back()[0], *std::find(searched.back().begin(), searched.back().end(),
+                                                 irregular[e].vertex));
+        continue;
+      }
+      const State& t = *chosen;
+      // Into the cage as edited: quads rewritten, added or removed; new and moved vertices.
+      std::vector<int> to_global = global;
+      for (size_t l = global.size(); l < t.valence.size(); ++l) {
+        to_global.push_back(static_cast<int>(points.size()));
+        points.push_back(t.point[l]);
+      }
+      for (int v : moved) points[to_global[v]] = t.point[v];
+      for (size_t q = 0; q < t.quads.size(); ++q) {
+        std::array<int, 4> c = {-1, -1, -1, -1};
+        if (t.quads[q][0] >= 0)
+          for (int k = 0; k < 4; ++k) c[k] = to_global[t.quads[q][k]];
+        if (t.origin[q] >= 0) quads[t.origin[q]] = c;
+        else quads.push_back(c);
+      }
+      for (int q : window_quads)
+        for (int k = 0; k < 4; ++k) locked[cage.quads(q, k)] = 1;
+      ++now;
+    }
+    if (!now) break;
+    total += now;
+    // Compacted: removed quads and vertices no quad or chain uses dropped.
+    std::vector<int> used(points.size(), 0);
+    for (const auto& c : quads)
+      if (c[0] >= 0) for (int v : c) used[v] = 1;
+    for (const auto& chain : cage.boundary_chains)
+      for (int v : chain) used[v] = 1;
+    std::vector<int> id(points.size(), -1);
+    int kept = 0;
+    for (size_t v = 0; v < points.size(); ++v)
+      if (used[v]) id[v] = kept++;
+    Vertices vertices(kept, 3);
+    for (size_t v = 0; v < points.size(); ++v)
+      if (id[v] >= 0) vertices.row(id[v]) = points[v].transpose();
+    const long live = std::count_if(quads.begin(), quads.end(), [](const auto& c) { return c[0] >= 0; });
+    Quads out(live, 4);
+    for (long q = 0, r = 0; q < static_cast<long>(quads.size()); ++q) {
+      if (quads[q][0] < 0) continue;
+      for (int k = 0; k < 4; ++k) out(r, k) = id[quads[q][k]];
+      ++r;
+    }
+    for (auto& chain : cage.boundary_chains)
+      for (int& v : chain) v = id[v];
+    for (auto& e : cage.crease_edges) e = {id[e[0]], id[e[1]]};
+    cage.vertices = std::move(vertices);
+    cage.quads = std::move(out);
+    std::vector<char> still_vain(kept, 0);
+    for (const auto& window : searched)
+      if (std::none_of(window.begin(), window.end(), [&](int v) { return locked[v]; }))
+        still_vain[id[window[0]]] = 1;
+    vain = std::move(still_vain);
+  }
+  return total;
+}
+
+}  // namespace genbrep::quad_detail
