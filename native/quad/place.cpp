@@ -114,10 +114,26 @@ template <class Take>
 void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
   const Halfedges he(s);
   const int nq = static_cast<int>(s.quads.size());
-  std::vector<std::vector<int>> quads_at(s.valence.size());
+  // The quads at each vertex: quads_at(v) (compressed rows).
+  std::vector<int> first(s.valence.size() + 1, 0), at_list;
   for (int q = 0; q < nq; ++q)
     if (s.quads[q][0] >= 0)
-      for (int v : s.quads[q]) quads_at[v].push_back(q);
+      for (int v : s.quads[q]) ++first[v + 1];
+  for (size_t v = 0; v + 1 < first.size(); ++v) first[v + 1] += first[v];
+  at_list.resize(first.back());
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (int q = 0; q < nq; ++q)
+      if (s.quads[q][0] >= 0)
+        for (int v : s.quads[q]) at_list[fill[v]++] = q;
+  }
+  struct Span {
+    const int *b, *e;
+    const int* begin() const { return b; }
+    const int* end() const { return e; }
+    size_t size() const { return static_cast<size_t>(e - b); }
+  };
+  auto quads_at = [&](int v) { return Span{at_list.data() + first[v], at_list.data() + first[v + 1]}; };
   auto in_focus = [&](int q) {
     if (s.quads[q][0] < 0) return false;
     for (int v : s.quads[q]) if (focus[v]) return true;
@@ -162,28 +178,29 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
       if (s.valence[p0] + s.valence[p2] - 2 > 6 || s.valence[p1] < 4 || s.valence[p3] < 4) continue;
       if (he.joined(p0, p2)) continue;
       // The link condition: p0 and p2 share no neighbour but p1 and p3, and no other quad.
-      std::set<int> around0;
+      std::vector<int> around0;  // p0's edge neighbours
       bool linked = false;
-      for (int r : quads_at[p0]) {
+      for (int r : quads_at(p0)) {
         if (r == q) continue;
         const auto& e = s.quads[r];
         linked |= std::count(e.begin(), e.end(), p2) > 0;
         for (int j = 0; j < 4; ++j)
-          if (e[j] == p0) around0.insert(e[(j + 1) % 4]), around0.insert(e[(j + 3) % 4]);
+          if (e[j] == p0) around0.push_back(e[(j + 1) % 4]), around0.push_back(e[(j + 3) % 4]);
       }
-      for (int r : quads_at[p2]) {
+      for (int r : quads_at(p2)) {
         if (r == q || linked) continue;
         const auto& e = s.quads[r];
         for (int j = 0; j < 4; ++j)
           if (e[j] == p2)
             for (int n : {e[(j + 1) % 4], e[(j + 3) % 4]})
-              linked |= n != p1 && n != p3 && around0.count(n);
+              linked |= n != p1 && n != p3 &&
+                        std::find(around0.begin(), around0.end(), n) != around0.end();
       }
       if (linked) continue;
       Editor edit(s);
       for (int v : {p0, p1, p2, p3}) edit.touch(v);
       edit.set_quad(q, {-1, -1, -1, -1});
-      for (int r : quads_at[p2]) {
+      for (int r : quads_at(p2)) {
         if (r == q) continue;
         std::array<int, 4> e = s.quads[r];
         for (int& v : e) if (v == p2) v = p0;
@@ -204,10 +221,10 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
   for (int u : splittable) {
     const int n = s.valence[u];
     if (!movable(u) || s.ring[u] >= kScoreRings || n < 5 || n > kMaxSplitValence) continue;
-    if (static_cast<int>(quads_at[u].size()) != n) continue;
+    if (static_cast<int>(quads_at(u).size()) != n) continue;
     // The fan of u in order: quad j runs from after[j] (after u) to before[j].
     std::vector<int> fan, after, before;
-    for (int r : quads_at[u])
+    for (int r : quads_at(u))
       for (int k = 0; k < 4; ++k)
         if (s.quads[r][k] == u) {
           fan.push_back(r);
@@ -256,11 +273,12 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
 
 // Unexplained vertices, then irregular ones, among the scored vertices (`scored`: the
 // window's vertices within kScoreRings and not on a chain; vertices added since are too).
-// `explains`: per window vertex, the singularities near enough to explain it where it was
-// (an edit's changed vertices are looked up again).
+// `explains`: per window vertex, the singularities near enough to explain it where it was,
+// at `start_point` (a vertex an edit moved is looked up again).
 std::pair<int, int> score(const State& s, const std::vector<SingularPoint>& singular,
                           const std::vector<int>& scored, size_t window_vertices,
-                          const std::vector<std::vector<Explaining>>& explains) {
+                          const std::vector<std::vector<Explaining>>& explains,
+                          const std::vector<Vec3>& start_point) {
   thread_local std::vector<Irregular> irregular;
   thread_local std::vector<Explaining> pairs;
   thread_local std::vector<int> left;
@@ -269,8 +287,7 @@ std::pair<int, int> score(const State& s, const std::vector<SingularPoint>& sing
     if (s.valence[v] == 0 || s.valence[v] == 4) return;
     const int entry = static_cast<int>(irregular.size());
     irregular.push_back({v, 4 - s.valence[v], s.point[v], s.reach[v]});
-    if (static_cast<size_t>(v) < window_vertices &&
-        std::find(s.changed.begin(), s.changed.end(), v) == s.changed.end()) {
+    if (static_cast<size_t>(v) < window_vertices && s.point[v] == start_point[v]) {
       for (const Explaining& x : explains[v])
         if (singular[x.point].index * irregular.back().carries > 0)
           pairs.push_back({x.distance, entry, x.point});
@@ -415,13 +432,14 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       std::vector<SingularPoint> near;
       for (const auto& point : singular)
         if ((point.point - centre).norm() <= extent) near.push_back(point);
+      const std::vector<Vec3> start_point = s.point;
       std::vector<std::vector<Explaining>> explains(s.valence.size());
       for (size_t l = 0; l < explains.size(); ++l)
         for (int sign : {1, -1})  // either sign: what the vertex carries changes with edits
           explaining_pairs({static_cast<int>(l), sign, s.point[l], s.reach[l]}, -1, near, &explains[l]);
       // Every sequence of one or two edits; the second at the first one's vertices. The
       // kKeptSequences best that leave fewer unexplained vertices are kept, best first.
-      const std::pair<int, int> before = score(s, near, scored, window_vertices, explains);
+      const std::pair<int, int> before = score(s, near, scored, window_vertices, explains, start_point);
       std::vector<std::pair<std::pair<int, int>, State>> kept;
       auto keep = [&](const std::pair<int, int>& now) {
         if (now.first >= before.first) return;
@@ -440,10 +458,10 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
               return v < static_cast<int>(start.size()) && start[v] != 4;
             }))
           return;
-        keep(score(s, near, scored, window_vertices, explains));
+        keep(score(s, near, scored, window_vertices, explains, start_point));
         std::vector<char> at_first(s.valence.size(), 0);
         for (int v : s.changed) at_first[v] = 1;
-        for_each_edit(s, at_first, [&] { keep(score(s, near, scored, window_vertices, explains)); });
+        for_each_edit(s, at_first, [&] { keep(score(s, near, scored, window_vertices, explains, start_point)); });
       });
       // The first whose quads, evened out around the changed vertices, are not squeezed or
       // turned over.

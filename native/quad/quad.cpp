@@ -400,7 +400,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // edits; kept if the cage stays valid with fewer such vertices.
   if (singular) {
     QuadCage placed = *cage;
-    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density, 4, dropped)) {
+    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density, 8, dropped)) {
       const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
       const int left = quad_detail::open_squeezed(checks, placed, 24);
       const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
