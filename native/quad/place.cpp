@@ -4,15 +4,17 @@
 // (irregular_off_singularities' matching), every sequence of at most two edits — an edge
 // rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
 // the window's connectivity alone (the first edit changing an irregular vertex, the
-// second one of the vertices the first changed); of those leaving fewer unexplained
+// second one of the vertices the first changed), and where none helps every sequence of
+// three whose first two leave no more unexplained; of those leaving fewer unexplained
 // vertices, the best few (fewest unexplained, then fewest irregular) are evened out in
 // turn around their changed vertices, and the first whose quads come out neither
 // squeezed nor turned over is made. Such defects are a −1 singularity drawn as a 6 and a
 // 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one edge off);
 // one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of the cage
-// found 2 of 49 with one edit, 25 with two). The caller opens squeezed quads and evens
-// the whole cage out.
-// Complexity: per unexplained vertex, (edits in the window)² window-sized steps; windows
+// found 2 of 49 with one edit, 25 with two; the three-edit search took the cage's 18
+// left to 14). The caller opens squeezed quads and evens the whole cage out.
+// Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
+// two edits do not help (pruned: the second must not add unexplained vertices); windows
 // searched in vain are not searched again until an edit touches them.
 #include <algorithm>
 #include <array>
@@ -437,8 +439,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       for (size_t l = 0; l < explains.size(); ++l)
         for (int sign : {1, -1})  // either sign: what the vertex carries changes with edits
           explaining_pairs({static_cast<int>(l), sign, s.point[l], s.reach[l]}, -1, near, &explains[l]);
-      // Every sequence of one or two edits; the second at the first one's vertices. The
-      // kKeptSequences best that leave fewer unexplained vertices are kept, best first.
+      // Of the sequences of edits tried, the kKeptSequences best that leave fewer
+      // unexplained vertices are kept, best first.
       const std::pair<int, int> before = score(s, near, scored, window_vertices, explains, start_point);
       std::vector<std::pair<std::pair<int, int>, State>> kept;
       auto keep = [&](const std::pair<int, int>& now) {
@@ -452,17 +454,35 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       std::vector<char> focus(s.valence.size(), 0);
       for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
       const std::vector<int> start = s.valence;
-      for_each_edit(s, focus, [&] {
-        // The first edit changes an irregular vertex.
-        if (std::none_of(s.changed.begin(), s.changed.end(), [&](int v) {
-              return v < static_cast<int>(start.size()) && start[v] != 4;
-            }))
-          return;
-        keep(score(s, near, scored, window_vertices, explains, start_point));
-        std::vector<char> at_first(s.valence.size(), 0);
-        for (int v : s.changed) at_first[v] = 1;
-        for_each_edit(s, at_first, [&] { keep(score(s, near, scored, window_vertices, explains, start_point)); });
+      // Sequences of one or two edits; where none leaves fewer unexplained, of three whose
+      // first two leave no more than before (each edit after the first at the vertices the
+      // edits so far changed).
+      auto first_edit = [&](auto&& then) {
+        for_each_edit(s, focus, [&] {
+          // The first edit changes an irregular vertex.
+          if (std::none_of(s.changed.begin(), s.changed.end(), [&](int v) {
+                return v < static_cast<int>(start.size()) && start[v] != 4;
+              }))
+            return;
+          then();
+        });
+      };
+      auto next_edit = [&](auto&& then) {
+        std::vector<char> at_last(s.valence.size(), 0);
+        for (int v : s.changed) at_last[v] = 1;
+        for_each_edit(s, at_last, then);
+      };
+      auto score_now = [&] { return score(s, near, scored, window_vertices, explains, start_point); };
+      first_edit([&] {
+        keep(score_now());
+        next_edit([&] { keep(score_now()); });
       });
+      if (kept.empty())
+        first_edit([&] {
+          next_edit([&] {
+            if (score_now().first <= before.first) next_edit([&] { keep(score_now()); });
+          });
+        });
       // The first whose quads, evened out around the changed vertices, are not squeezed or
       // turned over.
       State* chosen = nullptr;
