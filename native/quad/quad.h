@@ -36,7 +36,8 @@
 //      diagonal collapses, edge rotations and vertex splits; then those no field
 //      singularity explains (a −1 singularity drawn as a 6 and a 3, a 3–5 pair beside a
 //      5) are edited onto the singularities beside them or away: per such vertex the best
-//      sequence of at most two of those edits in a window of a few rings (place.cpp).
+//      sequence of at most two of those edits (three where two do not help) in a window
+//      of a few rings (place.cpp).
 //      Several layout choices are tried (reported); the
 //      fallback cage (a split coarse remesh) is the last resort.
 //   5. squaring: the kept cage's inner vertices of four quads move on the surface to bring

@@ -514,13 +514,15 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
                            const Dropped& dropped = Dropped());
 // Moves irregular vertices no singularity explains (irregular_off_singularities) onto the
-// singularities beside them: around each, the sequence of at most two edits (edge
-// rotation, diagonal collapse, vertex split of a vertex of 5–8 quads; none at a chain or
-// crease vertex) within a few rings that leaves the fewest unexplained vertices, then the
-// fewest irregular ones, is made if it leaves fewer unexplained (place.cpp). Windows
-// edited in one round are disjoint; at most `max_rounds` rounds. Merged and split vertices
-// are placed (onto the component), no other moves: the caller opens squeezed quads.
-// Returns the windows edited (0: the cage is unchanged).
+// singularities beside them, or cancels them (place.cpp): around each, sequences of up to
+// two edits (three where two do not help) — edge rotation, diagonal collapse, split of a
+// vertex of 5–8 quads; none at a chain or crease vertex — are scored on the window's
+// connectivity (fewest unexplained vertices, then fewest irregular); of those leaving
+// fewer unexplained, the best few are evened out around their changed vertices in turn
+// and the first whose quads are neither squeezed nor turned over is made (those vertices
+// and their neighbours move, onto the component). Windows edited in one round are
+// disjoint; at most `max_rounds` rounds. The caller opens squeezed quads and checks the
+// cage. Returns the windows edited (0: the cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const Dropped& dropped = Dropped());
