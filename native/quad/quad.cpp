@@ -417,6 +417,17 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
         *cage = std::move(placed);
         stats = placed_stats;
         stats.collapsed_quads = folded;
+      } else {
+        messages->notes.push_back(
+            "component " + std::to_string(surface.component) + ": " + std::to_string(windows) +
+            " local edits onto singularities not kept (" +
+            (left ? std::to_string(left) + " quads left squeezed or turned over"
+             : placed_stats.flipped_quads || placed_stats.degenerate_quads
+                 ? std::to_string(placed_stats.flipped_quads + placed_stats.degenerate_quads) +
+                       " quads flipped or degenerate"
+             : placed_off >= off ? "no fewer irregular vertices away from singularities"
+                                 : "not a valid 2-manifold: " + why) +
+            ")");
       }
     }
   }
