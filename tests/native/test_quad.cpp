@@ -1359,7 +1359,7 @@ QuadResult requested_net4_cage(const Partitioned& r, const CrossField& field,
 
 // On a net of genus 16 (h = 0.12) the requested layout with its corners chosen together
 // leaves fewer irregular vertices that no field singularity explains than with each patch's
-// corners fitted alone (measured from the requested layout alone: 3 against 29 with the
+// corners fitted alone (measured from the requested layout alone: 3 against 21 with the
 // edits onto singularities, 15 against 31 before them).
 TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
