@@ -361,17 +361,10 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       return reach[v];
     };
     // The unexplained vertices, as the measure finds them.
-    std::vector<Irregular> irregular;
-    for (int v = 0; v < nv; ++v) {
-      const int quads = static_cast<int>(incidence.quads_of[v].size());
-      if (incidence.on_chain[v] || quads == 4 || quads == 0) continue;
-      irregular.push_back({v, 4 - quads, cage.vertices.row(v).transpose(), reach_of(v)});
-    }
-    std::vector<Explaining> pairs;
-    for (size_t e = 0; e < irregular.size(); ++e)
-      explaining_pairs(irregular[e], static_cast<int>(e), singular, &pairs);
     std::vector<int> left;
-    match_pairs(pairs, irregular, singular, &left);
+    const std::vector<Irregular> irregular =
+        matched_irregulars(checks, cage, incidence, singular, density, &left);
+    for (const Irregular& x : irregular) reach[x.vertex] = x.reach;
     // The cage as edited this round: quads (removed: -1), vertices appended.
     std::vector<std::array<int, 4>> quads(cage.quads.rows());
     for (int q = 0; q < cage.quads.rows(); ++q)
@@ -381,7 +374,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     std::vector<char> locked(nv, 0);
     std::vector<int> ring(nv, -1);
     int now = 0;
-    std::vector<std::vector<int>> searched;  // the windows searched in vain (vertex first)
+    // The vertices whose windows were searched in vain, and those windows' vertices.
+    std::vector<std::pair<int, std::vector<int>>> searched;
     for (size_t e = 0; e < irregular.size(); ++e) {
       if (!left[e] || vain[irregular[e].vertex]) continue;
       dropped.check();
@@ -455,7 +449,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       };
       std::vector<char> focus(s.valence.size(), 0);
       for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
-      const std::vector<int> start = s.valence;
+      const std::vector<int> start = s.valence;  // the window's valences before any edit
       // Sequences of one or two edits; where none leaves fewer unexplained, of three whose
       // first two leave no more than before (each edit after the first at the vertices the
       // edits so far changed).
@@ -463,7 +457,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         for_each_edit(s, focus, [&] {
           // The first edit changes an irregular vertex.
           if (std::none_of(s.changed.begin(), s.changed.end(), [&](int v) {
-                return v < static_cast<int>(start.size()) && start[v] != 4;
+                return static_cast<size_t>(v) < window_vertices && start[v] != 4;
               }))
             return;
           then();
@@ -495,9 +489,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
           break;
         }
       if (!chosen) {
-        searched.push_back(global);
-        std::swap(searched.back()[0], *std::find(searched.back().begin(), searched.back().end(),
-                                                 irregular[e].vertex));
+        searched.push_back({irregular[e].vertex, std::move(global)});
         continue;
       }
       const State& t = *chosen;
@@ -547,9 +539,9 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     cage.vertices = std::move(vertices);
     cage.quads = std::move(out);
     std::vector<char> still_vain(kept, 0);
-    for (const auto& window : searched)
+    for (const auto& [vertex, window] : searched)
       if (std::none_of(window.begin(), window.end(), [&](int v) { return locked[v]; }))
-        still_vain[id[window[0]]] = 1;
+        still_vain[id[vertex]] = 1;
     vain = std::move(still_vain);
   }
   return total;

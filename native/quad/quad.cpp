@@ -173,9 +173,10 @@ void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& i
   }
 }
 
-int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
-                                const std::vector<SingularPoint>& singular, double density) {
-  const CageIncidence incidence(cage);
+std::vector<Irregular> matched_irregulars(const CageChecks& checks, const QuadCage& cage,
+                                          const CageIncidence& incidence,
+                                          const std::vector<SingularPoint>& singular,
+                                          double density, std::vector<int>* left) {
   std::vector<Irregular> irregular;
   for (int v = 0; v < static_cast<int>(cage.vertices.rows()); ++v) {
     const int quads = static_cast<int>(incidence.quads_of[v].size());
@@ -186,8 +187,14 @@ int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
   std::vector<Explaining> pairs;
   for (size_t e = 0; e < irregular.size(); ++e)
     explaining_pairs(irregular[e], static_cast<int>(e), singular, &pairs);
+  match_pairs(pairs, irregular, singular, left);
+  return irregular;
+}
+
+int irregular_off_singularities(const CageChecks& checks, const QuadCage& cage,
+                                const std::vector<SingularPoint>& singular, double density) {
   std::vector<int> left;
-  match_pairs(pairs, irregular, singular, &left);
+  matched_irregulars(checks, cage, CageIncidence(cage), singular, density, &left);
   return static_cast<int>(std::count_if(left.begin(), left.end(), [](int q) { return q != 0; }));
 }
 

@@ -458,6 +458,13 @@ void explaining_pairs(const Irregular& irregular, int entry,
 // quarter turns left unexplained (0: explained), into `carries`.
 void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& irregular,
                  const std::vector<SingularPoint>& singular, std::vector<int>* carries);
+// The interior irregular vertices of `cage` (`incidence` its CageIncidence) as
+// irregular_off_singularities matches them, and per entry in `left` the quarter turns no
+// singularity explains.
+std::vector<Irregular> matched_irregulars(const CageChecks& checks, const QuadCage& cage,
+                                          const CageIncidence& incidence,
+                                          const std::vector<SingularPoint>& singular,
+                                          double density, std::vector<int>* left);
 
 // measure_cage (quad.h) with the design's normals already built.
 QuadStats measure_cage(const QuadCage& cage, const DesignNormals& normals);
