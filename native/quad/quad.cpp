@@ -950,20 +950,23 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   const double asked = size_field_quads(coarse, variants[0].options.density);
   const auto preparing = std::chrono::steady_clock::now();
   const int levels = refine_levels(coarse, variants[0].options);
-  quad_detail::RefinedDesign refined;
-  if (levels > 0) refined = quad_detail::refine_component(design, partition, field, c, levels);
+  const quad_detail::RefinedDesign refined =
+      quad_detail::refine_component(design, partition, field, c, levels);
+  const bool finer = refined.mesh.n_faces() > 0;  // else: nothing needed splitting
   std::optional<quad_detail::Surface> refined_surface;
-  if (levels > 0) refined_surface.emplace(refined.mesh, refined.partition, refined.field, c);
+  if (finer) refined_surface.emplace(refined.mesh, refined.partition, refined.field, c);
   const quad_detail::Surface& surface = refined_surface ? *refined_surface : coarse;
   // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
   const quad_detail::CageChecks checks(coarse);
   int triangles = 0;  // of the (refined) component
   for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
-  if (levels > 0) {
+  if (finer) {
     char text[200];
     std::snprintf(text, sizeof text,
-                  "component %d: refined %dx for tracing (%d triangles) in %.1f s", c,
-                  1 << (2 * levels), triangles,
+                  "component %d: refined round its singularities%s for tracing (%d triangles) "
+                  "in %.1f s",
+                  c, levels > 0 ? (" and " + std::to_string(1 << (2 * levels)) + "x").c_str() : "",
+                  triangles,
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
     out->notes.push_back(text);
   }

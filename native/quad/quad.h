@@ -9,6 +9,7 @@
 //      quads its sizes give (a genus-4 lattice needs 96), the density is raised so that
 //      they stay a small fraction of the cage vertices (vertices_per_singular_quarter,
 //      reported); then the component's triangles are split (refine.cpp, same surface)
+//      round its singular vertices until each has two edges per separatrix, and then
 //      until a cage edge spans a few mesh edges, since separatrices follow mesh edges.
 //   1. layout: separatrices leave every interior singularity (one per sector of its cross)
 //      and every concave boundary corner, follow the field along mesh edges and stop where

@@ -4,19 +4,28 @@
 // which leaves a trace two mesh edges per cage edge to turn in (zigzag arcs, separatrices
 // that cannot leave a crowded singularity, sliver patches). Splitting the component's
 // edges gives the trace room without moving the surface.
-// Method: every edge with the component on both sides is split at its midpoint, `levels`
-// times; a triangle with three split edges becomes four, with two becomes three (the
-// quadrilateral left cut along its shorter diagonal), with one becomes two. Edges on the
-// component's loops and elsewhere in the design are not split, so the loops, the other
-// components and the solids keep their vertices and triangles.
+// Method: first, around every traced singularity of the component, the edges across its
+// triangles are split (each split adds an edge at the singular vertex) until it has two
+// edges per separatrix: a separatrix leaves along one mesh edge, midpoint splits keep
+// every old vertex's valence, and a level-set vertex has about six edges, so a valence-5
+// singularity's five directions met fewer distinct edges than separatrices (the lattice:
+// 12 separatrices could not leave, one singularity read a corner short and became a
+// valence-3 vertex beside a valence-7 one; the genus-9 net: 11). Then every edge with the
+// component on both sides is split at its midpoint, `levels` times. A triangle with three
+// split edges becomes four, with two becomes three (the quadrilateral left cut along its
+// shorter diagonal), with one becomes two. Edges on the component's loops and elsewhere
+// in the design are not split, so the loops, the other components and the solids keep
+// their vertices and triangles.
 // Carried over: vertices keep their indices (midpoints are appended); triangle t keeps index
 // t for its first child (others are appended) and every child copies its parent's per-face
 // data: partition labels and component, and the field's direction, sizes and curvature.
 // Singularities stay on their vertices (the field is constant on a parent's children, so
 // no new ones arise). The surface is the same point set: midpoints of flat triangles.
-// Complexity: O(F) per level; each level multiplies the component's triangles by about 4.
+// Complexity: O(F) per level; each level multiplies the component's triangles by about 4
+// (the splits round singular vertices add about a tenth on the nets).
 #include <array>
 #include <map>
+#include <vector>
 
 #include "mesh/mesh.h"
 #include "quad/detail/layout.h"
@@ -24,6 +33,11 @@
 namespace genbrep::quad_detail {
 
 namespace {
+
+// Mesh edges wanted at a singular vertex per separatrix, and the rounds of splits at most
+// (a vertex of 4 edges with 5 separatrices: 8, then 16).
+constexpr int kSingularEdgesPerSeparatrix = 2;
+constexpr int kSingularSplitRounds = 2;
 
 // Appends a copy of row parent[k] for every k (left alone if it is not a per-face array).
 template <typename Rows>
@@ -34,10 +48,22 @@ void append_rows(Rows& rows, const std::vector<int>& parent, Eigen::Index faces)
   for (size_t k = 0; k < parent.size(); ++k) rows.row(old + k) = rows.row(parent[k]);
 }
 
-// One level: splits the component's interior edges of `in` into `out`.
+// The component's interior edges (both sides in it) of `mesh`.
+std::vector<char> interior_edges(const TriMesh& mesh, const Partition& partition, int component) {
+  std::vector<char> split(mesh.n_edges(), 0);
+  for (auto e : mesh.edges()) {
+    const auto f0 = mesh.face_handle(mesh.halfedge_handle(e, 0));
+    const auto f1 = mesh.face_handle(mesh.halfedge_handle(e, 1));
+    split[e.idx()] = f0.is_valid() && f1.is_valid() &&
+                     partition.face_component[f0.idx()] == component &&
+                     partition.face_component[f1.idx()] == component;
+  }
+  return split;
+}
+
+// Splits the edges of `mesh` marked in `split` (at their midpoints) into `out`.
 void refine_once(const TriMesh& mesh, const Partition& partition, const CrossField& in_field,
-                 int component, RefinedDesign* out) {
-  const auto& face_component = partition.face_component;
+                 const std::vector<char>& split_edge, RefinedDesign* out) {
   const int nv = static_cast<int>(mesh.n_vertices()), nf = static_cast<int>(mesh.n_faces());
   TriangleMesh soup;
   std::vector<Vec3> points(nv);
@@ -48,11 +74,8 @@ void refine_once(const TriMesh& mesh, const Partition& partition, const CrossFie
   // Midpoint vertex per split edge.
   std::vector<int> midpoint(mesh.n_edges(), -1);
   for (auto e : mesh.edges()) {
-    const auto h0 = mesh.halfedge_handle(e, 0), h1 = mesh.halfedge_handle(e, 1);
-    const auto f0 = mesh.face_handle(h0), f1 = mesh.face_handle(h1);
-    if (!f0.is_valid() || !f1.is_valid() || face_component[f0.idx()] != component ||
-        face_component[f1.idx()] != component)
-      continue;
+    if (!split_edge[e.idx()]) continue;
+    const auto h0 = mesh.halfedge_handle(e, 0);
     midpoint[e.idx()] = static_cast<int>(points.size());
     points.push_back(0.5 * (points[mesh.from_vertex_handle(h0).idx()] +
                             points[mesh.to_vertex_handle(h0).idx()]));
@@ -132,18 +155,44 @@ void refine_once(const TriMesh& mesh, const Partition& partition, const CrossFie
 
 RefinedDesign refine_component(const TriMesh& design, const Partition& partition,
                                const CrossField& field, int component, int levels) {
-  GENBREP_CHECK(levels >= 1, Code::Internal, "quad: refine_component needs at least one level");
+  GENBREP_CHECK(levels >= 0, Code::Internal, "quad: refine_component needs levels >= 0");
   // The first level reads the design itself; no copy of it is made.
   RefinedDesign refined;
+  bool copied = false;  // refined holds the design as split so far (else: the design itself)
+  auto mesh = [&]() -> const TriMesh& { return copied ? refined.mesh : design; };
+  auto parts = [&]() -> const Partition& { return copied ? refined.partition : partition; };
+  auto cross = [&]() -> const CrossField& { return copied ? refined.field : field; };
+  // Around the traced singularities first (each round doubles a singular vertex's edges),
+  // on the coarse design: the levels below keep those edges and split the new triangles.
+  for (int round = 0; round < kSingularSplitRounds; ++round) {
+    const std::vector<char> interior = interior_edges(mesh(), parts(), component);
+    std::vector<char> split(interior.size(), 0);
+    bool any = false;
+    for (const Singularity& sing : cross().singularities) {
+      if (sing.component != component || sing.on_boundary || sing.index >= 4) continue;
+      const auto vh = mesh().vertex_handle(sing.vertex);
+      if (static_cast<int>(mesh().valence(vh)) >= kSingularEdgesPerSeparatrix * (4 - sing.index))
+        continue;
+      for (auto h : mesh().voh_range(vh)) {
+        if (!mesh().face_handle(h).is_valid()) continue;
+        const int across = mesh().edge_handle(mesh().next_halfedge_handle(h)).idx();
+        if (interior[across]) split[across] = 1, any = true;
+      }
+    }
+    if (!any) break;
+    RefinedDesign next;
+    refine_once(mesh(), parts(), cross(), split, &next);
+    refined = std::move(next);
+    copied = true;
+  }
   for (int level = 0; level < levels; ++level) {
     RefinedDesign next;
-    if (level == 0)
-      refine_once(design, partition, field, component, &next);
-    else
-      refine_once(refined.mesh, refined.partition, refined.field, component, &next);
+    refine_once(mesh(), parts(), cross(), interior_edges(mesh(), parts(), component), &next);
     next.levels = level + 1;
     refined = std::move(next);
+    copied = true;
   }
+  if (!copied) return RefinedDesign();
   return refined;
 }
 

@@ -1767,6 +1767,56 @@ TEST(Quad, RefiningAComponentKeepsItsSurfaceLoopsAndField) {
   }
 }
 
+// Refinement around singularities (refine.cpp): a separatrix leaves its singular vertex
+// along one mesh edge, and midpoint splits keep every old vertex's valence, so the edges
+// across a singular vertex's triangles are split first until it has two edges per
+// separatrix. On the genus-9 net some singular vertices have fewer (a valence-5
+// singularity on a vertex of 4 edges could send only four separatrices); after refinement
+// none has, and the surface, the design's vertices and the Euler characteristic are kept.
+TEST(Quad, RefiningGivesEverySingularityTwoEdgesPerSeparatrix) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  auto short_of_edges = [&](const TriMesh& m, const CrossField& f) {
+    int short_of = 0, traced = 0;
+    for (const Singularity& sing : f.singularities) {
+      if (sing.component != 0 || sing.on_boundary) continue;
+      ++traced;
+      short_of += static_cast<int>(m.valence(m.vertex_handle(sing.vertex))) < 2 * (4 - sing.index);
+    }
+    EXPECT_GT(traced, 0);
+    return short_of;
+  };
+  const int before = short_of_edges(r.mesh, field);
+  EXPECT_GT(before, 0);
+  const quad_detail::RefinedDesign refined =
+      quad_detail::refine_component(r.mesh, r.partition, field, 0, 1);
+  const TriMesh& m = refined.mesh;
+  std::printf("[quad] net 3x3: %d singular vertices short of two edges per separatrix, %d after\n",
+              before, short_of_edges(m, refined.field));
+  EXPECT_EQ(short_of_edges(m, refined.field), 0);
+  ASSERT_EQ(refined.field.singularities.size(), field.singularities.size());
+  for (size_t i = 0; i < field.singularities.size(); ++i)
+    EXPECT_EQ(refined.field.singularities[i].vertex, field.singularities[i].vertex);
+  const int nv = static_cast<int>(r.mesh.n_vertices());
+  for (int v = 0; v < nv; ++v)
+    EXPECT_EQ(m.point(m.vertex_handle(v)), r.mesh.point(r.mesh.vertex_handle(v)));
+  EXPECT_EQ(static_cast<long>(m.n_vertices()) - static_cast<long>(m.n_edges()) + static_cast<long>(m.n_faces()),
+            static_cast<long>(nv) - static_cast<long>(r.mesh.n_edges()) + static_cast<long>(r.mesh.n_faces()));
+  double area[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const TriMesh& mesh = k == 0 ? r.mesh : m;
+    const Partition& p = k == 0 ? r.partition : refined.partition;
+    for (auto f : mesh.faces()) {
+      if (p.face_component[f.idx()] != 0) continue;
+      std::vector<OpenMesh::Vec3d> c;
+      for (auto v : mesh.fv_range(f)) c.push_back(mesh.point(v));
+      area[k] += 0.5 * OpenMesh::cross(c[1] - c[0], c[2] - c[0]).norm();
+    }
+  }
+  EXPECT_NEAR(area[1], area[0], 1e-9 * area[0]);
+  for (auto h : m.halfedges()) EXPECT_FALSE(m.is_boundary(h));
+}
+
 // Dense singularities raise the density: asking for 200 cage vertices per quarter turn
 // on the sphere (8 quarter turns: 1600 vertices, more than its sizes give) raises it,
 // reported, with clearly more vertices than the plain cage, and the targets still hold.
@@ -1904,7 +1954,8 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsWorkIsSpent) {
 
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
 // singularities) gets a field-aligned cage that meets the targets, every loop one chain,
-// and the cage has the component's genus (V − E + F = 2 − 2g − loops).
+// the cage has the component's genus (V − E + F = 2 − 2g − loops), and every separatrix
+// leaves its singularity.
 TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
   const Scene scene = net_scene(0.1, 3);
   const Partitioned r = relaxed(partition_scene(scene));
@@ -1926,16 +1977,21 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
   const long euler = static_cast<long>(cage.vertices.rows()) - static_cast<long>(edges.size()) +
                      static_cast<long>(cage.quads.rows());
   EXPECT_EQ(euler, 2 - 2 * 9 - scene.expected_loops);
+  // Every separatrix leaves its singularity (refine.cpp gives each two mesh edges per
+  // separatrix; before, 12 of the net's could not and their patches read a corner short).
+  for (const std::string& note : result.notes)
+    EXPECT_EQ(note.find("could not leave"), std::string::npos) << note;
 }
 
-// A tangle the untangling cannot open: the 5 x 5 net's requested layout at h = 0.12 (sectors
-// read at their nodes) fills with 17 quads turned over and 1 degenerate in one region; the
-// untangling's diagonal collapses leave 4 turned over round a vertex of 13 quads, and the
-// layout failed (with the requested layout alone: the fallback cage). The patches under
-// those quads are merged with a neighbour and the layout filled again: one round gives a
-// valid field-aligned cage, said in the notes.
+// A tangle the untangling cannot open: the 6 x 6 net's requested layout at h = 0.1 fills
+// with quads turned over that the untangling's smoothing and diagonal collapses do not all
+// open (one collapse leaves a quad with a corner twice), and the layout fails (with the
+// requested layout alone: the fallback cage). The
+// patches under those quads are merged with a neighbour and the layout filled again: one
+// round gives a valid field-aligned cage, said in the notes. (Before the refinement round
+// singular vertices, the 5 x 5 net at h = 0.12 showed it; layouts move with such changes.)
 TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
-  const Partitioned r = relaxed(partition_scene(net_scene(0.12, 5)));
+  const Partitioned r = relaxed(partition_scene(net_scene(0.1, 6)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   auto requested = [&](int tangle_rounds) {
     QuadOptions options;
@@ -1949,16 +2005,20 @@ TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
   EXPECT_TRUE(without.stats[0].fallback);
   std::string said;
   for (const auto& d : without.diagnostics) said += d + "\n";
-  EXPECT_NE(said.find("flipped"), std::string::npos) << said;
+  // Named: quads left turned over, or (here) a diagonal collapse in the tangle leaving a
+  // quad with a corner twice.
+  EXPECT_TRUE(said.find("flipped") != std::string::npos ||
+              said.find("not a valid 2-manifold") != std::string::npos)
+      << said;
   const QuadResult with = requested(QuadOptions{}.max_tangle_rounds);
   ASSERT_EQ(with.cages.size(), 1u);
   EXPECT_FALSE(with.stats[0].fallback);
   EXPECT_EQ(check_cage(with.cages[0], r), 0);
-  expect_targets("net 5x5 after the tangle's patches merged", with.stats[0]);
+  expect_targets("net 6x6 after the tangle's patches merged", with.stats[0]);
   bool noted = false;
   for (const auto& n : with.notes) noted |= n.find("left turned over merged") != std::string::npos;
   EXPECT_TRUE(noted);
-  std::printf("[quad] net 5x5 requested layout: %d quads, %d irregular (%d off singularities), "
+  std::printf("[quad] net 6x6 requested layout: %d quads, %d irregular (%d off singularities), "
               "%.2f deg\n",
               with.stats[0].quads, with.stats[0].irregular_vertices,
               with.stats[0].irregular_off_singularities, with.stats[0].mean_angle_deviation_deg);
@@ -2100,10 +2160,11 @@ TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
 }
 
 // Layout choices run two at a time give the cage they give one at a time: on arches
-// (the second choice beats the first) and boss (the first fails, a later one is kept),
-// the same cage, stats and diagnostics, and the kept choice is not the requested one.
+// (the second choice beats the first) and components at h = 0.11 (one component's first
+// choice fails, a later one is kept), the same cage, stats and diagnostics, and the kept
+// choice is not the requested one.
 TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
-  for (const auto& [name, h] : {std::pair{"arches", 0.125}, {"boss", 0.1}}) {
+  for (const auto& [name, h] : {std::pair{"arches", 0.125}, {"components", 0.11}}) {
     const FixtureFiles f = load_fixture(name);
     Options options;
     options.incidence.mode = IncidenceOptions::Mode::Grid;

@@ -49,9 +49,11 @@ struct Messages {
   }
 };
 
-// The design with one component's triangles split `levels` (≥ 1) times (refine.cpp): the same
-// surface, finer for tracing; vertex indices and the first child of every triangle keep
-// their index, so loops and singularities carry over unchanged.
+// The design with one component's triangles split round its singular vertices (two edges
+// per separatrix at each) and then `levels` (≥ 0) times (refine.cpp): the same surface,
+// finer for tracing; vertex indices and the first child of every triangle keep their
+// index, so loops and singularities carry over unchanged. Empty (no faces) where nothing
+// needed splitting.
 struct RefinedDesign {
   TriMesh mesh;
   Partition partition;
