@@ -205,7 +205,8 @@ struct QuadOptions {
   double density = 1.0;
   // Separatrices follow mesh edges: the component's triangles are split (at most
   // max_refine_levels times, each halving its edges) until a target cage edge spans at
-  // least this many mesh edges. 0: trace on the design's own edges.
+  // least this many mesh edges. 0: trace on the design's own edges (but for the splits
+  // round singular vertices, refine.cpp, which are always made).
   double trace_edges_per_cage_edge = 4.0;
   int max_refine_levels = 2;
   // Interior cage vertices wanted per quarter turn of singularity index (Σ|index| over the
