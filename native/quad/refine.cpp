@@ -4,7 +4,8 @@
 // which leaves a trace two mesh edges per cage edge to turn in (zigzag arcs, separatrices
 // that cannot leave a crowded singularity, sliver patches). Splitting the component's
 // edges gives the trace room without moving the surface.
-// Method: first, around every traced singularity of the component, the edges across its
+// Method: first, around every interior singularity of the component (those the layout will
+// not trace, cancelled pairs and ones beside a loop, too), the edges across its
 // triangles are split (each split adds an edge at the singular vertex) until it has two
 // edges per separatrix: a separatrix leaves along one mesh edge, midpoint splits keep
 // every old vertex's valence, and a level-set vertex has about six edges, so a valence-5
@@ -162,7 +163,7 @@ RefinedDesign refine_component(const TriMesh& design, const Partition& partition
   auto mesh = [&]() -> const TriMesh& { return copied ? refined.mesh : design; };
   auto parts = [&]() -> const Partition& { return copied ? refined.partition : partition; };
   auto cross = [&]() -> const CrossField& { return copied ? refined.field : field; };
-  // Around the traced singularities first (each round doubles a singular vertex's edges),
+  // Around the interior singularities first (each round doubles a singular vertex's edges),
   // on the coarse design: the levels below keep those edges and split the new triangles.
   for (int round = 0; round < kSingularSplitRounds; ++round) {
     const std::vector<char> interior = interior_edges(mesh(), parts(), component);
@@ -192,8 +193,7 @@ RefinedDesign refine_component(const TriMesh& design, const Partition& partition
     refined = std::move(next);
     copied = true;
   }
-  if (!copied) return RefinedDesign();
-  return refined;
+  return refined;  // as constructed (no faces) where nothing was split
 }
 
 }  // namespace genbrep::quad_detail
