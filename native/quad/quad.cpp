@@ -39,6 +39,14 @@ DesignNormals::DesignNormals(const TriMesh& design) {
     const Vec3 n = (point_[c[1]] - point_[c[0]]).cross(point_[c[2]] - point_[c[0]]);
     for (int v : c) normal_[v] += n;
   }
+  creased_.assign(nv, 0);
+  for (auto f : design.faces()) {
+    int c[3], k = 0;
+    for (auto v : design.fv_range(f)) c[k++] = v.idx();
+    const Vec3 n = (point_[c[1]] - point_[c[0]]).cross(point_[c[2]] - point_[c[0]]);
+    for (int v : c)
+      creased_[v] |= n.dot(normal_[v]) < kFaceCheckCosine * n.norm() * normal_[v].norm();
+  }
   lo_ = Vec3::Constant(1e300);
   Vec3 hi = Vec3::Constant(-1e300);
   for (const Vec3& p : point_) lo_ = lo_.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -75,7 +83,13 @@ std::array<long, 3> DesignNormals::key(const Vec3& p) const {
 }
 
 Vec3 DesignNormals::nearest_normal(const Vec3& p) const {
+  bool creased = false;
+  return nearest_normal(p, &creased);
+}
+
+Vec3 DesignNormals::nearest_normal(const Vec3& p, bool* creased) const {
   const int v = nearest_vertex(p);
+  *creased = v >= 0 && creased_[v];
   return v < 0 ? Vec3(Vec3::Zero()) : normal_[v];
 }
 
@@ -305,11 +319,12 @@ bool quad_detail::faces_away(const ComponentLocator& locator, const Vec3 (&c)[4]
 bool quad_detail::turned_over(const DesignNormals& normals, const ComponentLocator& locator,
                               const Vec3 (&c)[4], int* hint) {
   const Vec3 across = (c[2] - c[0]).cross(c[3] - c[1]);
-  const Vec3 design = normals.nearest_normal(0.25 * (c[0] + c[1] + c[2] + c[3]));
+  bool creased = false;
+  const Vec3 design = normals.nearest_normal(0.25 * (c[0] + c[1] + c[2] + c[3]), &creased);
   if (design.squaredNorm() > 0) {
     const double agreement = across.dot(design);
     if (agreement <= 0 || normals.spans_thin_part(c, across)) return true;
-    if (agreement >= kFaceCheckCosine * across.norm() * design.norm()) return false;
+    if (agreement >= kFaceCheckCosine * across.norm() * design.norm() && !creased) return false;
   }
   return faces_away(locator, c, hint);
 }

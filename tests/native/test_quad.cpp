@@ -1178,6 +1178,61 @@ TEST(Quad, AQuadStandingOnTheSurfaceUnderItIsFlipped) {
   EXPECT_EQ(flipped(quad(Vec3(0.95, 0, 0.3), Vec3(1.05, 0, 0.3), Vec3(1.05, 0.1, 0.4), Vec3(0.95, 0.1, 0.4))), 0);
 }
 
+// On a crease the nearest design vertex's normal is the mean of the two sides, and a
+// quad can agree with it yet stand on the side under its centre. A tent, its two sides'
+// normals 57° off vertical either way (114° apart, as on a genus-16 net's crease where
+// a quad folded over it): a quad near the ridge, over the +y side, tilted 25° towards −y
+// (within 30° of the ridge vertex's vertical normal, 82° from the side under it) is
+// flipped; the same quad untilted (57° from that side) and one lying on that side are not.
+TEST(Quad, AQuadAgreeingWithACreaseVertexButStandingOnTheSideUnderItIsFlipped) {
+  const double slope = std::tan(57 * M_PI / 180), h = 0.3 * slope;
+  auto height = [&](double y) { return h - slope * std::abs(y); };
+  TriangleMesh tent;
+  const int nx = 21, ny = 7;  // x from 0 to 2, y from −0.3 to 0.3; the ridge a grid row
+  tent.vertices.resize(nx * ny, 3);
+  tent.triangles.resize(2 * (nx - 1) * (ny - 1), 3);
+  for (int i = 0; i < ny; ++i)
+    for (int j = 0; j < nx; ++j) {
+      const double y = -0.3 + 0.1 * i;
+      tent.vertices.row(i * nx + j) << 0.1 * j, y, height(y);
+    }
+  for (int i = 0, t = 0; i + 1 < ny; ++i)
+    for (int j = 0; j + 1 < nx; ++j) {
+      const int a = i * nx + j;
+      tent.triangles.row(t++) << a, a + 1, a + nx + 1;
+      tent.triangles.row(t++) << a, a + nx + 1, a + nx;
+    }
+  const TriMesh design = to_trimesh(tent);
+  Partition partition;
+  partition.face_component.assign(design.n_faces(), 0);
+  partition.organic_components = 1;
+  CrossField field;
+  field.direction = FaceVectors(static_cast<Eigen::Index>(design.n_faces()), 3);
+  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
+  field.size_u = field.size_v = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(design.n_faces()), 1.0);
+  const quad_detail::Surface surface(design, partition, field, 0);
+  const quad_detail::CageChecks checks(surface);
+  // A square of half-width 0.03 round (1, 0.03) on the +y side, normal `n`.
+  auto square = [&](const Vec3& n) {
+    const Vec3 centre(1, 0.03, height(0.03) + 0.002), u(1, 0, 0), v = n.normalized().cross(u);
+    QuadCage cage;
+    cage.vertices.resize(4, 3);
+    cage.vertices << (centre - 0.03 * (u + v)).transpose(), (centre + 0.03 * (u - v)).transpose(),
+        (centre + 0.03 * (u + v)).transpose(), (centre - 0.03 * (u - v)).transpose();
+    cage.quads.resize(1, 4);
+    cage.quads << 0, 1, 2, 3;
+    return cage;
+  };
+  const Vec3 ridge_normal = checks.normals.nearest_normal(Vec3(1, 0.03, height(0.03))).normalized();
+  ASSERT_GT(ridge_normal.z(), 0.99);  // the ridge vertex, the mean of the two sides
+  const Vec3 tilted(0, -std::sin(25 * M_PI / 180), std::cos(25 * M_PI / 180));
+  ASSERT_GT(tilted.dot(ridge_normal), std::cos(30 * M_PI / 180));
+  auto flipped = [&](const Vec3& n) { return quad_detail::measure_cage(square(n), checks).flipped_quads; };
+  EXPECT_EQ(flipped(tilted), 1);
+  EXPECT_EQ(flipped(Vec3(0, 0, 1)), 0);
+  EXPECT_EQ(flipped(Vec3(0, slope, 1)), 0);  // the +y side's normal
+}
+
 // The design vertex nearest a point is the nearest of all, on the surface, inside and
 // off it (a long thin box: its grid's cells are 1.5 mean edges wide, much finer than the
 // box, so points off it are found in widening cubes).

@@ -359,6 +359,10 @@ class DesignNormals {
   explicit DesignNormals(const TriMesh& design);
   int nearest_vertex(const Vec3& p) const;   // -1 if the design has no vertex
   Vec3 nearest_normal(const Vec3& p) const;  // zero if the design has no vertex
+  // The same, and whether that vertex sits on a crease: one of its triangles' normals more
+  // than acos(kFaceCheckCosine) = 30° from its normal, so that its normal does not stand
+  // for the surface round it.
+  Vec3 nearest_normal(const Vec3& p, bool* creased) const;
   // Whether a quad faces against the design: its normal ((c2 − c0) × (c3 − c1)) against
   // the design's at the vertex nearest its centre, or it spans a thin part.
   bool flipped(const Vec3 (&corner)[4]) const;
@@ -370,6 +374,7 @@ class DesignNormals {
 
  private:
   std::vector<Vec3> point_, normal_;
+  std::vector<char> creased_;  // per vertex (nearest_normal)
   Vec3 lo_;
   double cell_ = 1;
   std::array<long, 3> cells_{};   // per axis
@@ -483,7 +488,9 @@ bool faces_away(const ComponentLocator& locator, const Vec3 (&corner)[4], int* h
 // the checks, and the untangling's, evening out's and squaring's quad_is_bad, so that a
 // move they allow never makes a cage the measure rejects): DesignNormals::flipped, and
 // unless the quad's normal is within acos(kFaceCheckCosine) = 30° of the nearest design
-// vertex's, faces_away. The design vertex nearest a quad's centre can lie round a fillet
+// vertex's and that vertex is not on a crease, faces_away. (On a crease the vertex's
+// normal is the mean of two sides: a quad folded over the genus-16 net's crease (h 0.12,
+// node price 2) agreed with it but was 95° from the triangle under its centre.) The design vertex nearest a quad's centre can lie round a fillet
 // from the surface under it: the 5 x 5 net (h 0.12, traces reaching singularities by
 // route_to) had quads at 92° and 114° to the triangle under them that agreed with that
 // vertex within 45°, the bound before. Looking up every quad costs 2.2 s on the 6 x 6 net.
