@@ -118,10 +118,13 @@ struct QuadOptions {
   bool global_corners = true;
   // What a node whose sectors do not add up to its quarter turns (an irregular vertex off
   // the singularities) costs, per quarter turn, against re-reading sectors (a sector's
-  // cost: how much further its angle is from the new reading, in quarter turns). At 1.5 and
-  // 2.5 the 3 x 3 net's joint cage folded (18 off kept, from another choice); at 0.75, 11
-  // off against 8.
-  double corner_node_price = 1.0;
+  // cost: how much further its angle is from the new reading, in quarter turns). Since
+  // every separatrix leaves its singularity (refine.cpp's splits), 25 nets (genus 9-49,
+  // bench/quad_sweep at h 0.1-0.14) leave 437 / 360 / 298 / 302 / 309 / 339 irregular
+  // vertices off singularities at 1 / 1.5 / 2 / 2.5 / 3 / 4 (oversized quads 2580 → 2068
+  // at 2, skewed 2756 → 2123), genus 64 189 / 181 / 178 / 173 at 1 / 2 / 2.5 / 3; the
+  // fixtures none at any of these.
+  double corner_node_price = 2.0;
   // Re-reading a sector of a patch one corner off also costs this times how far the patch
   // is then from a rectangle (best_corners' side term: Σ 2 |difference| / sum over its
   // pairs of opposite side targets). Nets of genus 9-49, irregular vertices off
