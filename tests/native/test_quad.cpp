@@ -207,6 +207,46 @@ void expect_targets(const std::string& name, const QuadStats& s) {
 
 // A flat n × n vertex grid of spacing h in the xy plane, one organic component with no
 // loops, the field along x with target size 1.
+// Every face of `mesh` in one organic component.
+Partition one_component(const TriMesh& mesh) {
+  Partition partition;
+  partition.face_component.assign(mesh.n_faces(), 0);
+  partition.organic_components = 1;
+  return partition;
+}
+
+// A field along x on every face, target size 1.
+CrossField field_along_x(const TriMesh& mesh) {
+  const int nf = static_cast<int>(mesh.n_faces());
+  CrossField field;
+  field.direction = FaceVectors(nf, 3);
+  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
+  field.size_u = field.size_v = Eigen::VectorXd::Constant(nf, 1.0);
+  return field;
+}
+
+// A whole mesh as one component under field_along_x, with what cage checks read on it.
+struct WholeComponent {
+  explicit WholeComponent(const TriMesh& m)
+      : mesh(m), partition(one_component(mesh)), field(field_along_x(mesh)),
+        surface(mesh, partition, field, 0), checks(surface) {}
+  TriMesh mesh;
+  Partition partition;
+  CrossField field;
+  quad_detail::Surface surface;
+  quad_detail::CageChecks checks;
+};
+
+// One quad with corners a, b, c, d.
+QuadCage one_quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  QuadCage cage;
+  cage.vertices.resize(4, 3);
+  cage.vertices << a.transpose(), b.transpose(), c.transpose(), d.transpose();
+  cage.quads.resize(1, 4);
+  cage.quads << 0, 1, 2, 3;
+  return cage;
+}
+
 struct FlatGrid {
   // Spacing h along x, h_y (default h) along y; diagonals from (x, y) to (x + h, y + h_y).
   FlatGrid(int n, double h, double h_y = 0) {
@@ -223,12 +263,8 @@ struct FlatGrid {
         grid.triangles.row(t++) << a, a + n + 1, a + n;
       }
     mesh = to_trimesh(grid);
-    const int nf = static_cast<int>(mesh.n_faces());
-    partition.face_component.assign(nf, 0);
-    partition.organic_components = 1;
-    field.direction = FaceVectors(nf, 3);
-    field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
-    field.size_u = field.size_v = Eigen::VectorXd::Constant(nf, 1.0);
+    partition = one_component(mesh);
+    field = field_along_x(mesh);
   }
   TriMesh mesh;
   Partition partition;
@@ -1140,34 +1176,18 @@ TEST(Quad, AQuadAcrossAStrutFacesAgainstTheDesign) {
 // tilted 60° or bent 45° over the edge y = 0: fine; standing at 85° on the top face, or
 // turned over: not.
 TEST(Quad, AQuadStandingOnTheSurfaceUnderItIsFlipped) {
-  const TriMesh box = to_trimesh(box_mesh(Vec3(0, 0, 0), Vec3(2, 0.4, 0.4), 8));
-  Partition partition;
-  partition.face_component.assign(box.n_faces(), 0);
-  partition.organic_components = 1;
-  CrossField field;
-  field.direction = FaceVectors(static_cast<Eigen::Index>(box.n_faces()), 3);
-  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
-  field.size_u = field.size_v = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(box.n_faces()), 1.0);
-  const quad_detail::Surface surface(box, partition, field, 0);
-  const quad_detail::CageChecks checks(surface);
+  const WholeComponent box(to_trimesh(box_mesh(Vec3(0, 0, 0), Vec3(2, 0.4, 0.4), 8)));
+  const quad_detail::CageChecks& checks = box.checks;
   int hint = -1;
   EXPECT_EQ(checks.locator.normals_at(Vec3(1.02, 0.21, 0.5), &hint).size(), 1u);  // over a face
   EXPECT_EQ(checks.locator.normals_at(Vec3(1.02, -0.1, 0.5), &hint).size(), 2u);  // off an edge
   EXPECT_GE(checks.locator.normals_at(Vec3(-0.1, -0.1, 0.5), &hint).size(), 3u);  // off a corner
-  auto quad = [](const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-    QuadCage cage;
-    cage.vertices.resize(4, 3);
-    cage.vertices << a.transpose(), b.transpose(), c.transpose(), d.transpose();
-    cage.quads.resize(1, 4);
-    cage.quads << 0, 1, 2, 3;
-    return cage;
-  };
   auto flipped = [&](const QuadCage& cage) { return quad_detail::measure_cage(cage, checks).flipped_quads; };
   // A unit of width along x, a rise `up` over a run `run` across y, starting on the top face.
   auto tilted = [&](double degrees) {
     const double run = 0.1 * std::cos(degrees * M_PI / 180), up = 0.1 * std::sin(degrees * M_PI / 180);
-    return quad(Vec3(0.95, 0.15, 0.4), Vec3(1.05, 0.15, 0.4), Vec3(1.05, 0.15 + run, 0.4 + up),
-                Vec3(0.95, 0.15 + run, 0.4 + up));
+    return one_quad(Vec3(0.95, 0.15, 0.4), Vec3(1.05, 0.15, 0.4), Vec3(1.05, 0.15 + run, 0.4 + up),
+                    Vec3(0.95, 0.15 + run, 0.4 + up));
   };
   EXPECT_EQ(flipped(tilted(0)), 0);
   EXPECT_EQ(flipped(tilted(60)), 0);
@@ -1175,7 +1195,7 @@ TEST(Quad, AQuadStandingOnTheSurfaceUnderItIsFlipped) {
   EXPECT_EQ(flipped(tilted(180)), 1);  // turned over
   // Bent 45° over the edge y = 0 (from the side face onto the top face): its centre lies
   // off the edge, by both triangles there within 45°.
-  EXPECT_EQ(flipped(quad(Vec3(0.95, 0, 0.3), Vec3(1.05, 0, 0.3), Vec3(1.05, 0.1, 0.4), Vec3(0.95, 0.1, 0.4))), 0);
+  EXPECT_EQ(flipped(one_quad(Vec3(0.95, 0, 0.3), Vec3(1.05, 0, 0.3), Vec3(1.05, 0.1, 0.4), Vec3(0.95, 0.1, 0.4))), 0);
 }
 
 // On a crease the nearest design vertex's normal is the mean of the two sides, and a
@@ -1202,26 +1222,13 @@ TEST(Quad, AQuadAgreeingWithACreaseVertexButStandingOnTheSideUnderItIsFlipped) {
       tent.triangles.row(t++) << a, a + 1, a + nx + 1;
       tent.triangles.row(t++) << a, a + nx + 1, a + nx;
     }
-  const TriMesh design = to_trimesh(tent);
-  Partition partition;
-  partition.face_component.assign(design.n_faces(), 0);
-  partition.organic_components = 1;
-  CrossField field;
-  field.direction = FaceVectors(static_cast<Eigen::Index>(design.n_faces()), 3);
-  field.direction.rowwise() = Eigen::RowVector3d(1, 0, 0);
-  field.size_u = field.size_v = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(design.n_faces()), 1.0);
-  const quad_detail::Surface surface(design, partition, field, 0);
-  const quad_detail::CageChecks checks(surface);
+  const WholeComponent design(to_trimesh(tent));
+  const quad_detail::CageChecks& checks = design.checks;
   // A square of half-width 0.03 round (1, 0.03) on the +y side, normal `n`.
   auto square = [&](const Vec3& n) {
     const Vec3 centre(1, 0.03, height(0.03) + 0.002), u(1, 0, 0), v = n.normalized().cross(u);
-    QuadCage cage;
-    cage.vertices.resize(4, 3);
-    cage.vertices << (centre - 0.03 * (u + v)).transpose(), (centre + 0.03 * (u - v)).transpose(),
-        (centre + 0.03 * (u + v)).transpose(), (centre - 0.03 * (u - v)).transpose();
-    cage.quads.resize(1, 4);
-    cage.quads << 0, 1, 2, 3;
-    return cage;
+    return one_quad(centre - 0.03 * (u + v), centre + 0.03 * (u - v), centre + 0.03 * (u + v),
+                    centre - 0.03 * (u - v));
   };
   const Vec3 ridge_normal = checks.normals.nearest_normal(Vec3(1, 0.03, height(0.03))).normalized();
   ASSERT_GT(ridge_normal.z(), 0.99);  // the ridge vertex, the mean of the two sides
