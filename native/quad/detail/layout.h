@@ -490,10 +490,11 @@ bool faces_away(const ComponentLocator& locator, const Vec3 (&corner)[4], int* h
 // unless the quad's normal is within acos(kFaceCheckCosine) = 30° of the nearest design
 // vertex's and that vertex is not on a crease, faces_away. (On a crease the vertex's
 // normal is the mean of two sides: a quad folded over the genus-16 net's crease (h 0.12,
-// node price 2) agreed with it but was 95° from the triangle under its centre.) The design vertex nearest a quad's centre can lie round a fillet
-// from the surface under it: the 5 x 5 net (h 0.12, traces reaching singularities by
-// route_to) had quads at 92° and 114° to the triangle under them that agreed with that
-// vertex within 45°, the bound before. Looking up every quad costs 2.2 s on the 6 x 6 net.
+// node price 2) agreed with it but was 95° from the triangle under its centre.) The
+// design vertex nearest a quad's centre can lie round a fillet from the surface under it:
+// the 5 x 5 net (h 0.12, traces reaching singularities by route_to) had quads at 92° and
+// 114° to the triangle under them that agreed with that vertex within 45°, the bound
+// before. Looking up every quad costs 2.2 s on the 6 x 6 net.
 constexpr double kFaceCheckCosine = 0.866;
 bool turned_over(const DesignNormals& normals, const ComponentLocator& locator,
                  const Vec3 (&corner)[4], int* hint = nullptr);
