@@ -3,6 +3,7 @@
 #include "quad/quad.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -33,18 +34,21 @@ DesignNormals::DesignNormals(const TriMesh& design) {
     const auto& p = design.point(design.vertex_handle(v));
     point_[v] = Vec3(p[0], p[1], p[2]);
   }
+  // Area-weighted vertex normals; then whether a triangle turns more than 30° from them.
+  std::vector<std::array<int, 3>> corners(design.n_faces());
+  std::vector<Vec3> face_normal(design.n_faces());
   for (auto f : design.faces()) {
-    int c[3], k = 0;
+    std::array<int, 3>& c = corners[f.idx()];
+    int k = 0;
     for (auto v : design.fv_range(f)) c[k++] = v.idx();
     const Vec3 n = (point_[c[1]] - point_[c[0]]).cross(point_[c[2]] - point_[c[0]]);
+    face_normal[f.idx()] = n;
     for (int v : c) normal_[v] += n;
   }
   creased_.assign(nv, 0);
-  for (auto f : design.faces()) {
-    int c[3], k = 0;
-    for (auto v : design.fv_range(f)) c[k++] = v.idx();
-    const Vec3 n = (point_[c[1]] - point_[c[0]]).cross(point_[c[2]] - point_[c[0]]);
-    for (int v : c)
+  for (size_t f = 0; f < corners.size(); ++f) {
+    const Vec3& n = face_normal[f];
+    for (int v : corners[f])
       creased_[v] |= n.dot(normal_[v]) < kFaceCheckCosine * n.norm() * normal_[v].norm();
   }
   lo_ = Vec3::Constant(1e300);

@@ -1856,9 +1856,10 @@ TEST(Quad, RefiningGivesEverySingularityTwoEdgesPerSeparatrix) {
   const quad_detail::RefinedDesign refined =
       quad_detail::refine_component(r.mesh, r.partition, field, 0, 1);
   const TriMesh& m = refined.mesh;
+  const int after = short_of_edges(m, refined.field);
   std::printf("[quad] net 3x3: %d singular vertices short of two edges per separatrix, %d after\n",
-              before, short_of_edges(m, refined.field));
-  EXPECT_EQ(short_of_edges(m, refined.field), 0);
+              before, after);
+  EXPECT_EQ(after, 0);
   ASSERT_EQ(refined.field.singularities.size(), field.singularities.size());
   for (size_t i = 0; i < field.singularities.size(); ++i)
     EXPECT_EQ(refined.field.singularities[i].vertex, field.singularities[i].vertex);
