@@ -12,7 +12,12 @@
 // 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one edge off);
 // one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of the cage
 // found 2 of 49 with one edit, 25 with two; the three-edit search took the cage's 18
-// left to 14). The caller opens squeezed quads and evens the whole cage out.
+// left to 14). A 3 and a 5 the layout left a few edges apart, away from any singularity
+// (rows shifting by one where a sliver or cusp collapsed), need more edits than that:
+// sequences leaving as many unexplained and no more irregular vertices that draw them
+// nearer each other are ranked too, after those leaving fewer (draw_pairs_together), and
+// later rounds cancel them once they meet. The caller opens squeezed quads and evens the whole
+// cage out.
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
 // two edits do not help (pruned: the second must not add unexplained vertices); windows
 // searched in vain are not searched again until an edit touches them.
@@ -41,6 +46,12 @@ constexpr double kMinPlacedCorner = 5.0;
 constexpr size_t kKeptSequences = 6;
 // Sweeps evening out an edit's vertices and their neighbours (settle).
 constexpr int kSettleSweeps = 3;
+// Drawing pairs together (place_irregulars' draw_pairs_together): a sequence leaving as many
+// unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
+// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets:
+// 297 → 276 with 3 and 0.25; 278 with 6 and 0.25; 284 with 6 and 0.5).
+constexpr double kPairSpreadCap = 3.0;
+constexpr double kPairCloser = 0.25;
 
 // A window's connectivity after some edits, in local vertex ids.
 struct State {
@@ -276,13 +287,16 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
 }
 
 // Unexplained vertices, then irregular ones, among the scored vertices (`scored`: the
-// window's vertices within kScoreRings and not on a chain; vertices added since are too).
+// window's vertices within kScoreRings and not on a chain; vertices added since are too),
+// then with `spread` how far the unexplained ones are from one of opposite sign (in reaches,
+// each up to kPairSpreadCap, summed; 0 without).
 // `explains`: per window vertex, the singularities near enough to explain it where it was,
 // at `start_point` (a vertex an edit moved is looked up again).
-std::pair<int, int> score(const State& s, const std::vector<SingularPoint>& singular,
-                          const std::vector<int>& scored, size_t window_vertices,
-                          const std::vector<std::vector<Explaining>>& explains,
-                          const std::vector<Vec3>& start_point) {
+using Score = std::tuple<int, int, double>;
+Score score(const State& s, const std::vector<SingularPoint>& singular,
+            const std::vector<int>& scored, size_t window_vertices,
+            const std::vector<std::vector<Explaining>>& explains,
+            const std::vector<Vec3>& start_point, bool spread) {
   thread_local std::vector<Irregular> irregular;
   thread_local std::vector<Explaining> pairs;
   thread_local std::vector<int> left;
@@ -302,8 +316,18 @@ std::pair<int, int> score(const State& s, const std::vector<SingularPoint>& sing
   for (int v : scored) add(v);
   for (size_t v = window_vertices; v < s.valence.size(); ++v) add(static_cast<int>(v));
   match_pairs(pairs, irregular, singular, &left);
+  double apart = 0;
+  for (size_t i = 0; spread && i < irregular.size(); ++i) {
+    if (!left[i]) continue;
+    double nearest = kPairSpreadCap;
+    for (size_t j = 0; j < irregular.size(); ++j)
+      if (left[j] * left[i] < 0)
+        nearest = std::min(nearest, (irregular[i].point - irregular[j].point).norm() /
+                                        std::max(irregular[i].reach, 1e-12));
+    apart += nearest;
+  }
   return {static_cast<int>(std::count_if(left.begin(), left.end(), [](int q) { return q != 0; })),
-          static_cast<int>(irregular.size())};
+          static_cast<int>(irregular.size()), apart};
 }
 
 // Evens out the changed vertices of `s` and their neighbours (kSettleSweeps sweeps: each
@@ -345,7 +369,7 @@ bool settle(const CageChecks& checks, State& s, std::vector<int>* moved) {
 
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     const Dropped& dropped) {
+                     bool draw_pairs_together, const Dropped& dropped) {
   int total = 0;
   // Vertices whose window was searched in vain and has not changed since: not again.
   std::vector<char> vain(cage.vertices.rows(), 0);
@@ -436,11 +460,20 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         for (int sign : {1, -1})  // either sign: what the vertex carries changes with edits
           explaining_pairs({static_cast<int>(l), sign, s.point[l], s.reach[l]}, -1, near, &explains[l]);
       // Of the sequences of edits tried, the kKeptSequences best that leave fewer
-      // unexplained vertices are kept, best first.
-      const std::pair<int, int> before = score(s, near, scored, window_vertices, explains, start_point);
-      std::vector<std::pair<std::pair<int, int>, State>> kept;
-      auto keep = [&](const std::pair<int, int>& now) {
-        if (now.first >= before.first) return;
+      // unexplained vertices (or as many, no more irregular ones, drawn kPairCloser nearer
+      // to ones of opposite sign) are kept, best first.
+      auto score_now = [&] {
+        return score(s, near, scored, window_vertices, explains, start_point, draw_pairs_together);
+      };
+      const Score before = score_now();
+      std::vector<std::pair<Score, State>> kept;
+      auto keep = [&](const Score& now) {
+        const auto [off, irregular_now, apart] = now;
+        const auto [off_before, irregular_before, apart_before] = before;
+        if (off > off_before ||
+            (off == off_before &&
+             !(irregular_now <= irregular_before && apart < apart_before - kPairCloser)))
+          return;
         if (kept.size() == kKeptSequences && !(now < kept.back().first)) return;
         const auto at = std::upper_bound(kept.begin(), kept.end(), now,
                                          [](const auto& x, const auto& y) { return x < y.first; });
@@ -468,7 +501,6 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         for (int v : s.changed) at_last[v] = 1;
         for_each_edit(s, at_last, then);
       };
-      auto score_now = [&] { return score(s, near, scored, window_vertices, explains, start_point); };
       first_edit([&] {
         keep(score_now());
         next_edit([&] { keep(score_now()); });
@@ -476,7 +508,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       if (kept.empty())
         first_edit([&] {
           next_edit([&] {
-            if (score_now().first <= before.first) next_edit([&] { keep(score_now()); });
+            if (std::get<0>(score_now()) <= std::get<0>(before)) next_edit([&] { keep(score_now()); });
           });
         });
       // The first whose quads, evened out around the changed vertices, are not squeezed or

@@ -382,7 +382,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
                             const std::vector<quad_detail::SingularPoint>* singular = nullptr,
-                            double density = 1) {
+                            double density = 1, bool draw_pairs_together = false) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
@@ -426,7 +426,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // edits; kept if the cage stays valid with fewer such vertices.
   if (singular) {
     QuadCage placed = *cage;
-    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density, 8, dropped)) {
+    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density, 8,
+                                                          draw_pairs_together, dropped)) {
       const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
       const int left = quad_detail::open_squeezed(checks, placed, 24);
       const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
@@ -737,7 +738,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
                                       std::to_string(doublets) +
                                       " doublets (interior vertices of two quads) removed");
     *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped,
-                               options.place_irregulars ? &singular : nullptr, options.density);
+                               options.place_irregulars ? &singular : nullptr, options.density,
+                               options.draw_pairs_together);
     std::set<int> tangled;  // the patches the quads left turned over came from
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);
@@ -842,16 +844,24 @@ bool meets_targets(const QuadStats& s) {
          s.mean_angle_deviation_deg <= 12.0;
 }
 
-// Meets them with a margin (valence 4 ≥ 98%, valence 3 ≥ 95%, ≤ 8°) and has no irregular
-// vertex away from the field's singularities: no other layout choice is tried.
+// Meets them with a margin (valence 4 ≥ 98%, valence 3 ≥ 95%, ≤ 8°), has no irregular
+// vertex away from the field's singularities and follows the size field's density: no
+// other layout choice is tried.
 bool comfortably_meets_targets(const QuadStats& s) {
   return s.interior_valence4_fraction() >= 0.98 && s.boundary_valence3_fraction() >= 0.95 &&
-         s.mean_angle_deviation_deg <= 8.0 && s.irregular_off_singularities == 0;
+         s.mean_angle_deviation_deg <= 8.0 && s.irregular_off_singularities == 0 &&
+         s.size_field_miss() == 0;
 }
 
 }  // namespace
 
 namespace quad_detail {
+constexpr double kEvenDensityMiss = 0.1;  // ~10%
+// A cage within 0.8–1.2× the quads its size field asks for beats one outside, and of two
+// outside the nearer, by more than kEvenDensityMiss in log ratio (issue 5: density
+// follows the size field): arches' second component, whose requested layout has 1.25×
+// once pairs are drawn together, keeps a choice with 0.92×, and a sphere whose density is
+// raised for its singularities the densest of its choices (all under half of what it asks).
 // Irregular vertices away from singularities count first (issue 5 wants none): none
 // against some always wins; otherwise counts within 15% (or 2) of each other are even.
 // Then skewed quads (a corner over 45° off square), counts within 20% (or 5) even: the
@@ -865,6 +875,9 @@ bool better_cage(const QuadStats& a, const QuadStats& b) {
 bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b) {
   if (meets_a != meets_b) return meets_a;
   if ((a.collapsed_quads > 0) != (b.collapsed_quads > 0)) return a.collapsed_quads == 0;
+  const double miss_a = a.size_field_miss(), miss_b = b.size_field_miss();
+  if (meets_a && (miss_a == 0) != (miss_b == 0)) return miss_a == 0;
+  if (meets_a && std::abs(miss_a - miss_b) > kEvenDensityMiss) return miss_a < miss_b;
   const int off_a = a.irregular_off_singularities, off_b = b.irregular_off_singularities;
   if (meets_a && off_a != off_b &&
       (std::min(off_a, off_b) == 0 ||
@@ -1060,6 +1073,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                    &a->messages, &a->work, dropped);
       a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
           checks, a->cage, singular, variants[k].options.density);
+      a->stats.size_field_quads = asked;
     } catch (...) {
       a->error = std::current_exception();
       a->dropped = dropped.stopped();

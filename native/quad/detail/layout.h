@@ -538,11 +538,13 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
 // fewer unexplained, the best few are evened out around their changed vertices in turn
 // and the first whose quads are neither squeezed nor turned over is made (those vertices
 // and their neighbours move, onto the component). Windows edited in one round are
-// disjoint; at most `max_rounds` rounds. The caller opens squeezed quads and checks the
-// cage. Returns the windows edited (0: the cage is unchanged).
+// disjoint; at most `max_rounds` rounds. With `draw_pairs_together` a sequence leaving
+// as many unexplained vertices and no more irregular ones is made too if it brings them
+// nearer to ones of opposite sign (QuadOptions::draw_pairs_together). The caller opens
+// squeezed quads and checks the cage. Returns the windows edited (0: the cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     const Dropped& dropped = Dropped());
+                     bool draw_pairs_together = false, const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
