@@ -1461,7 +1461,7 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
 
 // On the net of genus 16 (h = 0.12) the requested layout leaves irregular vertices beside
 // singularities that do not explain them; the local edits of place_irregulars leave fewer
-// (measured, the requested layout alone: 26 without, 7 with; 13 with before pairs were
+// (measured, the requested layout alone: 26 without, 9 with; 13 with before pairs were
 // drawn together (IrregularPairsAreDrawnTogetherOnANet); 22 and 12 at node price 1; 11
 // and 3 before the splits round singular vertices), the cage valid and
 // within the targets, and say so in a note.
@@ -1488,7 +1488,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
 // drawing them together (edits leaving as many unexplained vertices but bringing them
 // nearer one of opposite sign) lets later rounds cancel them: fewer irregular vertices off
 // singularities, and fewer irregular vertices, the cage valid and within the targets
-// (measured: 13 against 7 off singularities, 171 against 167 irregular).
+// (measured: 13 against 9 off singularities, 171 against 168 irregular).
 TEST(Quad, IrregularPairsAreDrawnTogetherOnANet) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
