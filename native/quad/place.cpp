@@ -16,8 +16,8 @@
 // (rows shifting by one where a sliver or cusp collapsed), need more edits than that:
 // sequences leaving as many unexplained and no more irregular vertices that draw them
 // nearer each other are ranked too, after those leaving fewer (draw_pairs_together), and
-// later rounds cancel them once they meet. The caller opens squeezed quads and evens the whole
-// cage out.
+// later rounds cancel them once they meet. The caller opens squeezed quads and evens the
+// whole cage out.
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
 // two edits do not help (pruned: the second must not add unexplained vertices); windows
 // searched in vain are not searched again until an edit touches them.
@@ -48,8 +48,9 @@ constexpr size_t kKeptSequences = 6;
 constexpr int kSettleSweeps = 3;
 // Drawing pairs together (place_irregulars' draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
-// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets:
-// 297 → 276 with 3 and 0.25; 278 with 6 and 0.25; 284 with 6 and 0.5).
+// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets,
+// before the three-edit search's fix below: 297 → 276 with 3 and 0.25; 278 with 6 and
+// 0.25; 284 with 6 and 0.5).
 constexpr double kPairSpreadCap = 3.0;
 constexpr double kPairCloser = 0.25;
 
@@ -513,7 +514,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       if (!fewer)
         first_edit([&] {
           next_edit([&] {
-            if (std::get<0>(score_now()) <= std::get<0>(before)) next_edit([&] { keep(score_now()); });
+            if (std::get<0>(score_now()) <= std::get<0>(before))
+              next_edit([&] { keep(score_now()); });
           });
         });
       // The first whose quads, evened out around the changed vertices, are not squeezed or

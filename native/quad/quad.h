@@ -115,8 +115,8 @@ struct QuadOptions {
   // With place_irregulars: edits that leave as many unexplained vertices but bring them
   // nearer to unexplained ones of opposite sign are made too, so that a 3 and a 5 the
   // layout left a few edges apart (a dislocation where rows shift) meet and cancel in a
-  // later round. 25 nets (genus 9-49, h 0.1-0.14): 297 → 276 irregular vertices off
-  // singularities, oversized and skewed quads unchanged (2070 / 2124 → 2081 / 2126).
+  // later round. 25 nets (genus 9-49, h 0.1-0.14): 297 → 245 irregular vertices off
+  // singularities, oversized / skewed quads 2070 / 2124 → 2059 / 2111; genus 64 181 → 165.
   bool draw_pairs_together = true;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
