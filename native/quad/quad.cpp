@@ -1233,7 +1233,6 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                     best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads);
       out->diagnostics.push_back(text);
     }
-    best_stats.size_field_quads = asked;
     out->cages.push_back(std::move(best_cage));
     out->stats.push_back(best_stats);
     return;
