@@ -121,6 +121,7 @@ struct Layout {
   bool allow_crossing = false;      // separatrices (not repair cuts) cross transversally
   double length_cap = 0;             // traces cross others only before this length
   double merge_parallel = 0;         // join a nearly parallel curve closer than this × size
+  double arrival_snap = 0;           // QuadOptions::arrival_snap (0: off)
   int parallel_joins = 0;
   // Cusp sectors (by outgoing halfedge) read as quarter turns after all, because the
   // layout did not balance with them (straighten_cusps).
