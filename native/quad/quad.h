@@ -124,9 +124,9 @@ struct QuadOptions {
   // traced beside it as an extra spoke; 0: the direction recorded is the field's on the
   // last mesh edge, which near a singularity can lie over half the spacing off. 25 nets
   // (genus 9-49, h 0.1-0.14): irregular vertices off singularities 245 → 233, skewed
-  // quads 2111 → 1795, oversized 2059 → 1879 (0.2: 261, 0.3: 249; snapping to the
-  // nearest direction even when taken: one net's layouts could not be quantized); genus 64
-  // 165 → 64 of ~1700, skewed 857 → 456.
+  // quads 2111 → 1795, oversized 2059 → 1879 (0.2: 261, 0.3: 249; the nearest free
+  // direction at any angle: one net's layouts could not be quantized); genus 64 165 → 64
+  // of ~1700, skewed 857 → 456.
   double arrival_snap = 0.25;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
