@@ -766,6 +766,32 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   EXPECT_FALSE(quad_detail::better_cage(follows, other));
 }
 
+// A layout on an n × n FlatGrid: a barrier curve along column 30 (x = 3 at spacing 0.1)
+// and one singular vertex, with its separatrix directions, for walks to head for.
+quad_detail::Layout barrier_and_singularity(const quad_detail::Surface& s, int n, int singular,
+                                            const std::vector<Vec3>& directions) {
+  quad_detail::Layout layout = quad_detail::start_layout(s);
+  quad_detail::Curve barrier;
+  for (int i = 0; i < n; ++i) barrier.vertices.push_back(i * n + 30);
+  barrier.direction.assign(n, Vec3(0, 1, 0));
+  layout.curves.push_back(barrier);
+  quad_detail::register_curve(s, layout, 0);
+  layout.attractors = {singular};
+  layout.attractor_directions = {directions};
+  layout.claimed[singular] = 1;
+  return layout;
+}
+
+// A valence-5 singularity's separatrix directions in the xy plane, the first at `degrees`.
+std::vector<Vec3> valence5_directions(double degrees) {
+  std::vector<Vec3> directions;
+  for (int k = 0; k < 5; ++k) {
+    const double angle = (degrees + 72 * k) * M_PI / 180;
+    directions.push_back(Vec3(std::cos(angle), std::sin(angle), 0));
+  }
+  return directions;
+}
+
 // A walk passing near a singular vertex heads for it only along one of its separatrix
 // directions that no curve takes yet: arriving beside one that does would squeeze a sixth
 // corner into a valence-5 vertex.
@@ -777,27 +803,15 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
   auto vertex = [&](int i, int j) { return i * n + j; };
   const int singular = vertex(20, 20);  // (2, 2)
   auto fresh_layout = [&](bool taken) {
-    quad_detail::Layout layout = quad_detail::start_layout(s);
-    quad_detail::Curve barrier;
-    for (int i = 0; i < n; ++i) barrier.vertices.push_back(vertex(i, 30));  // x = 3
-    barrier.direction.assign(n, Vec3(0, 1, 0));
-    layout.curves.push_back(barrier);
+    // Valence 5, one direction 20° below −x (the walk comes in near it); barrier at x = 3.
+    quad_detail::Layout layout = barrier_and_singularity(s, n, singular, valence5_directions(200));
     if (taken) {  // a separatrix leaving the singularity towards −x
       quad_detail::Curve left;
       for (int j = 20; j >= 15; --j) left.vertices.push_back(vertex(20, j));
       left.direction.assign(left.vertices.size(), Vec3(-1, 0, 0));
       layout.curves.push_back(left);
+      quad_detail::register_curve(s, layout, 1);
     }
-    for (int c = 0; c < static_cast<int>(layout.curves.size()); ++c)
-      quad_detail::register_curve(s, layout, c);
-    layout.attractors = {singular};
-    std::vector<Vec3> directions;  // valence 5, one 20° below −x (the walk comes in near it)
-    for (int k = 0; k < 5; ++k) {
-      const double angle = (200 + 72 * k) * M_PI / 180;
-      directions.push_back(Vec3(std::cos(angle), std::sin(angle), 0));
-    }
-    layout.attractor_directions = {directions};
-    layout.claimed[singular] = 1;
     return layout;
   };
   auto spokes = [&](int v) {
@@ -838,22 +852,10 @@ TEST(Quad, AWalkArrivingAtASingularityTakesTheSeparatrixDirectionItFills) {
     for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
     return out;
   };
-  std::vector<Vec3> directions;  // valence 5, one 10° below −x
-  for (int k = 0; k < 5; ++k) {
-    const double angle = (190 + 72 * k) * M_PI / 180;
-    directions.push_back(Vec3(std::cos(angle), std::sin(angle), 0));
-  }
+  const std::vector<Vec3> directions = valence5_directions(190);  // one 10° below −x
   struct Ends { int first, second; Vec3 recorded; };
   auto two_walks = [&](double snap) {
-    quad_detail::Layout layout = quad_detail::start_layout(s);
-    quad_detail::Curve barrier;
-    for (int i = 0; i < n; ++i) barrier.vertices.push_back(vertex(i, 30));  // x = 3
-    barrier.direction.assign(n, Vec3(0, 1, 0));
-    layout.curves.push_back(barrier);
-    quad_detail::register_curve(s, layout, 0);
-    layout.attractors = {singular};
-    layout.attractor_directions = {directions};
-    layout.claimed[singular] = 1;
+    quad_detail::Layout layout = barrier_and_singularity(s, n, singular, directions);  // x = 3
     layout.arrival_snap = snap;
     Ends ends{-1, -1, Vec3::Zero()};
     const int first = vertex(20, 10), second = vertex(19, 10);  // (1, 2) and (1, 1.9)
@@ -893,15 +895,8 @@ TEST(Quad, AWalkOneRowBesideASingularityReachesIt) {
   const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
   auto vertex = [&](int i, int j) { return i * n + j; };
   const int singular = vertex(20, 20);  // (2, 0.6)
-  quad_detail::Layout layout = quad_detail::start_layout(s);
-  quad_detail::Curve barrier;
-  for (int i = 0; i < n; ++i) barrier.vertices.push_back(vertex(i, 30));  // x = 3
-  barrier.direction.assign(n, Vec3(0, 1, 0));
-  layout.curves.push_back(barrier);
-  quad_detail::register_curve(s, layout, 0);
-  layout.attractors = {singular};
-  layout.attractor_directions = {{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)}};
-  layout.claimed[singular] = 1;
+  quad_detail::Layout layout = barrier_and_singularity(  // barrier at x = 3
+      s, n, singular, {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)});
   const int start = vertex(21, 10);  // (1, 0.63)
   std::vector<int> spokes;
   for (auto oh : mesh.voh_range(mesh.vertex_handle(start))) spokes.push_back(oh.idx());
