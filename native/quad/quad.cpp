@@ -430,8 +430,9 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // edits; kept if the cage stays valid with fewer such vertices.
   if (singular) {
     QuadCage placed = *cage;
-    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density, kPlaceRounds,
-                                                          draw_pairs_together, dropped)) {
+    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density,
+                                                          kPlaceRounds, draw_pairs_together,
+                                                          dropped)) {
       const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
       const int left = quad_detail::open_squeezed(checks, placed, 24);
       const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);

@@ -335,11 +335,12 @@ bool free_arrival(const Surface& s, const Layout& layout, size_t i, const Vec3& 
   return true;
 }
 
-// The separatrix direction of attractor w that a curve arriving at it fills (layout
-// .arrival_snap): of w's directions no curve leaves it along yet, the nearest to the chord
-// from w back to the curve's first vertex at least a target edge length away, if within
-// arrival_snap of their spacing; null otherwise. The walk's last step is one mesh edge,
-// and on the mesh split round w it can run up to half the spacing off that chord.
+// The separatrix direction of attractor w that a curve arriving at it fills
+// (QuadOptions::arrival_snap): of w's directions no curve leaves it along yet, the one
+// nearest to the chord from w back to the curve's first vertex at least a target edge
+// length away, if within arrival_snap of their spacing; null otherwise. The walk's last
+// step is one mesh edge, and on the mesh split round w it can run up to half the spacing
+// off that chord.
 const Vec3* arrival_direction(const Surface& s, const Layout& layout, const Curve& curve) {
   const int w = curve.vertices.back();
   const auto at = std::find(layout.attractors.begin(), layout.attractors.end(), w);
@@ -525,7 +526,8 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
       // Arriving at a singular vertex along one of its free separatrix directions: that
       // direction is taken (the singularity's own separatrix is not traced beside it).
       if (!own)
-        if (const Vec3* along = arrival_direction(s, layout, curve)) curve.direction.back() = -*along;
+        if (const Vec3* along = arrival_direction(s, layout, curve))
+          curve.direction.back() = -*along;
       layout.curves.push_back(curve);
       register_curve(s, layout, c);
       layout.node[vertex] = 1;

@@ -844,8 +844,9 @@ TEST(Quad, AWalkArrivingAtASingularityTakesTheSeparatrixDirectionItFills) {
   const TriMesh& mesh = flat.mesh;
   auto vertex = [&](int i, int j) { return i * n + j; };
   const int singular = vertex(20, 20);  // (2, 2)
-  for (auto fh : mesh.vf_range(mesh.vertex_handle(singular)))  // the fan's field turned 50°
-    flat.field.direction.row(fh.idx()) << std::cos(50 * M_PI / 180), std::sin(50 * M_PI / 180), 0;
+  const double turned = 50 * M_PI / 180;  // the fan's field
+  for (auto fh : mesh.vf_range(mesh.vertex_handle(singular)))
+    flat.field.direction.row(fh.idx()) << std::cos(turned), std::sin(turned), 0;
   const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
   auto spokes = [&](int v) {
     std::vector<int> out;
@@ -859,13 +860,15 @@ TEST(Quad, AWalkArrivingAtASingularityTakesTheSeparatrixDirectionItFills) {
     layout.arrival_snap = snap;
     Ends ends{-1, -1, Vec3::Zero()};
     const int first = vertex(20, 10), second = vertex(19, 10);  // (1, 2) and (1, 1.9)
-    if (!quad_detail::trace_direction(s, layout, first, spokes(first), Vec3(1, 0, 0), true)) return ends;
+    if (!quad_detail::trace_direction(s, layout, first, spokes(first), Vec3(1, 0, 0), true))
+      return ends;
     const quad_detail::Curve& walk = layout.curves.back();
     ends.first = walk.vertices.back();
     const auto h = mesh.find_halfedge(mesh.vertex_handle(singular),
                                       mesh.vertex_handle(walk.vertices[walk.vertices.size() - 2]));
     ends.recorded = layout.halfedge_dir[h.idx()];
-    if (!quad_detail::trace_direction(s, layout, second, spokes(second), Vec3(1, 0, 0), true)) return ends;
+    if (!quad_detail::trace_direction(s, layout, second, spokes(second), Vec3(1, 0, 0), true))
+      return ends;
     ends.second = layout.curves.back().vertices.back();
     return ends;
   };
