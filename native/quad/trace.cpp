@@ -315,6 +315,17 @@ std::vector<int> parallel_join(const Surface& s, const Layout& layout, int w, co
   return best;
 }
 
+// Whether a curve leaves vertex a along direction d (unit, tangent at a) already: one of
+// a's curve edges records a direction there within half a separatrix spacing `half_cos`
+// (its cosine) of d.
+bool direction_taken(const Surface& s, const Layout& layout, int a, const Vec3& d,
+                     double half_cos) {
+  for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(a)))
+    if (layout.edge_curve[oh.idx() >> 1] >= 0 && layout.halfedge_dir[oh.idx()].dot(d) > half_cos)
+      return true;
+  return false;
+}
+
 // Whether a trace arriving at attractor i from point p comes in along one of its separatrix
 // directions (within half their spacing) along which no curve leaves it yet. Arriving
 // otherwise would add a sector to the singularity (a valence-6 cage vertex at a valence-5
@@ -328,11 +339,7 @@ bool free_arrival(const Surface& s, const Layout& layout, size_t i, const Vec3& 
   const Vec3* along = nullptr;
   for (const Vec3& d : directions)
     if (in.dot(d) > half) along = &d;
-  if (!along) return false;
-  for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(a)))
-    if (layout.edge_curve[oh.idx() >> 1] >= 0 && layout.halfedge_dir[oh.idx()].dot(*along) > half)
-      return false;
-  return true;
+  return along && !direction_taken(s, layout, a, *along, half);
 }
 
 // The separatrix direction of attractor w that a curve arriving at it fills
@@ -357,12 +364,8 @@ const Vec3* arrival_direction(const Surface& s, const Layout& layout, const Curv
   const double half = std::cos(0.5 * spacing);
   const Vec3* nearest = nullptr;
   double best = std::cos(layout.arrival_snap * spacing);
-  for (const Vec3& d : directions) {
-    bool taken = false;
-    for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(w)))
-      taken |= layout.edge_curve[oh.idx() >> 1] >= 0 && layout.halfedge_dir[oh.idx()].dot(d) > half;
-    if (!taken && in.dot(d) > best) best = in.dot(d), nearest = &d;
-  }
+  for (const Vec3& d : directions)
+    if (in.dot(d) > best && !direction_taken(s, layout, w, d, half)) best = in.dot(d), nearest = &d;
   return nearest;
 }
 
