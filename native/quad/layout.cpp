@@ -168,13 +168,21 @@ bool remove_stretch(const Surface& s, Layout& layout, std::vector<int> vertices)
   return false;
 }
 
+// A stretch as its two ends, lower first: the same stretch traced again by a fix in
+// build_patches reads as the one taken off.
+std::pair<int, int> stretch_ends(const std::vector<int>& vertices) {
+  return std::minmax(vertices.front(), vertices.back());
+}
+
 // The vertices of the shortest of `arcs` that lies on an open curve (a separatrix or cut,
-// not a loop); empty if there is none.
+// not a loop) and whose ends are not in `passed`; empty if there is none.
 std::vector<int> shortest_open_arc(const Layout& layout, const PatchLayout& patches,
-                                   const std::vector<int>& arcs) {
+                                   const std::vector<int>& arcs,
+                                   const std::set<std::pair<int, int>>& passed = {}) {
   int best = -1;
   for (int a : arcs) {
     if (layout.curves[patches.arcs[a].curve].closed) continue;
+    if (passed.count(stretch_ends(patches.arcs[a].vertices))) continue;
     if (best < 0 || patches.arcs[a].length < patches.arcs[best].length) best = a;
   }
   return best < 0 ? std::vector<int>() : patches.arcs[best].vertices;
@@ -188,11 +196,15 @@ double side_target(const std::vector<Arc>& arcs, const Patch& patch, int k) {
   return sum;
 }
 
-bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch) {
+bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch,
+                 std::set<std::pair<int, int>>* removed) {
   std::vector<int> arcs;
   for (const auto& side : patches.patches[patch].sides)
     for (auto& [a, reversed] : side) arcs.push_back(a);
-  return remove_stretch(s, layout, shortest_open_arc(layout, patches, arcs));
+  const std::vector<int> stretch = shortest_open_arc(layout, patches, arcs, *removed);
+  if (!remove_stretch(s, layout, stretch)) return false;
+  removed->insert(stretch_ends(stretch));
+  return true;
 }
 
 int straighten_cusps(Layout& layout, const PatchLayout& patches, int patch) {

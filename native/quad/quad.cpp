@@ -687,6 +687,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   std::string failure;
   bool relaxed = false;
   int merged = 0, straightened = 0, tangle_rounds = 0, tangle_patches = 0;
+  std::set<std::pair<int, int>> merged_arcs;  // stretches merge_patch took off, by their ends
   // Each round changes the layout in a few places: only the patches there are read again.
   quad_detail::PatchReading reading;
   // A cage whose untangling leaves quads turned over (one tangle, as measured) has the
@@ -708,7 +709,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
       const std::vector<int> unbalanced = quad_detail::unbalanced_patches(patches);
       for (int p : unbalanced) taken += quad_detail::straighten_cusps(layout, patches, p);
       if (!taken && round < options.max_balance_rounds)
-        for (int p : unbalanced) now += quad_detail::merge_patch(surface, layout, patches, p);
+        for (int p : unbalanced) now += quad_detail::merge_patch(surface, layout, patches, p, &merged_arcs);
       GENBREP_CHECK(now + taken > 0, Code::StageFailure,
                     "quad: component " + std::to_string(c) + ": quantization of " +
                         std::to_string(patches.patches.size()) + " patches: " + failure +
@@ -749,7 +750,7 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);
     int now = 0;
-    for (int p : tangled) now += quad_detail::merge_patch(surface, layout, patches, p);
+    for (int p : tangled) now += quad_detail::merge_patch(surface, layout, patches, p, &merged_arcs);
     if (!now) {
       messages->append(layout_messages);
       messages->append(filled_messages);

@@ -318,7 +318,11 @@ void release_quantize_thread();
 std::vector<int> unbalanced_patches(const PatchLayout& patches);
 // Merges `patch` with a neighbour by taking the shortest separatrix arc on its boundary off
 // the layout (build_patches is then run again); false if it has none left to remove.
-bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch);
+// `removed` holds the ends (lower first) of the stretches taken off so far, and an arc
+// between such ends is passed over: a fix in build_patches can trace a stretch taken off
+// again, and taking it off once more gives back the same layout round after round.
+bool merge_patch(const Surface& s, Layout& layout, const PatchLayout& patches, int patch,
+                 std::set<std::pair<int, int>>* removed);
 // Takes back the cusp readings of `patch`, or if it has none, of every cusp patch that
 // shares an arc with it (Layout::no_cusp; build_patches is then run again); returns how
 // many were taken back.
