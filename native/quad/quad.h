@@ -128,6 +128,15 @@ struct QuadOptions {
   // direction at any angle: one net's layouts could not be quantized); genus 64 165 → 64
   // of ~1700, skewed 857 → 456.
   double arrival_snap = 0.25;
+  // A curve that ends at a singular vertex further off every free direction than
+  // arrival_snap records there the chord it comes in along (over a target edge length),
+  // not the field's direction on the last mesh edge: a direction within half the spacing
+  // of the chord then counts as taken, and is not traced beside it. false: the field's.
+  // With max_balance_rounds 16 (8 left one net's layouts unbalanced; 16 and 32 balance
+  // it): 25 nets (genus 9-49, h 0.1-0.14) 206 → 175 irregular vertices off
+  // singularities, oversized / skewed quads 1872 / 1781 → 1465 / 1343; but genus 64
+  // 65 → 84, oversized / skewed 851 / 460 → 1108 / 640 (docs/quad_method.md).
+  bool arrival_chord = true;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make
@@ -188,7 +197,8 @@ struct QuadOptions {
   // cuts from the middle of an arc only peel pieces off it. false: not.
   bool cut_pinches = true;
   // Rounds of merging patches whose sides cannot balance, before quantization gives up.
-  int max_balance_rounds = 8;
+  // With arrival_chord, 8 were too few for the genus-49 net at h 0.1; 16 are enough.
+  int max_balance_rounds = 16;
   // Rounds of merging the patches under quads that the untangling left turned over (a
   // tangle) with a neighbour and filling the layout again, before the layout choice fails.
   int max_tangle_rounds = 3;

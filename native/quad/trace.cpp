@@ -6,8 +6,9 @@
 // the walk tracks the ideal streamline point and picks the forward neighbour closest to it.
 // As a layout choice, a walk that comes close beside a nearly parallel curve joins it
 // across a short link curve instead of converging onto it (parallel_join). A walk that
-// ends on a singular vertex takes the separatrix direction it arrives along
-// (arrival_direction), so that direction is not traced again from the singularity.
+// ends on a singular vertex takes the separatrix direction it arrives along, or records
+// its chord there (arrival_direction), so that direction is not traced again from the
+// singularity.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -342,22 +343,22 @@ bool free_arrival(const Surface& s, const Layout& layout, size_t i, const Vec3& 
   return along && !direction_taken(s, layout, a, *along, half);
 }
 
-// The separatrix direction of attractor w that a curve arriving at it fills
-// (QuadOptions::arrival_snap): of w's directions no curve leaves it along yet, the one
-// nearest to the chord from w back to the curve's first vertex at least a target edge
-// length away, if within arrival_snap of their spacing; null otherwise. The walk's last
-// step is one mesh edge, and on the mesh split round w it can run up to half the spacing
-// off that chord.
-const Vec3* arrival_direction(const Surface& s, const Layout& layout, const Curve& curve) {
+// The direction a curve arriving at attractor w records there (pointing out of w), or
+// false to keep the field's on the last fan face. Of w's directions no curve leaves it
+// along yet, the one nearest to the chord from w back to the curve's first vertex at least
+// a target edge length away, if within QuadOptions::arrival_snap of their spacing; else,
+// with QuadOptions::arrival_chord, the chord itself. The walk's last step is one mesh
+// edge, and on the mesh split round w it can run up to half the spacing off that chord.
+bool arrival_direction(const Surface& s, const Layout& layout, const Curve& curve, Vec3* out) {
   const int w = curve.vertices.back();
   const auto at = std::find(layout.attractors.begin(), layout.attractors.end(), w);
   const size_t i = static_cast<size_t>(at - layout.attractors.begin());
-  if (layout.arrival_snap <= 0 || at == layout.attractors.end() ||
-      i >= layout.attractor_directions.size() || layout.attractor_directions[i].empty())
-    return nullptr;
+  if ((layout.arrival_snap <= 0 && !layout.arrival_chord) || at == layout.attractors.end() ||
+      i >= layout.attractor_directions.size() || layout.attractor_directions[i].empty() ||
+      curve.vertices.size() < 2)
+    return false;
   int back = static_cast<int>(curve.vertices.size()) - 2;
   while (back > 0 && (s.point[curve.vertices[back]] - s.point[w]).norm() < s.vertex_size[w]) --back;
-  if (back < 0) return nullptr;
   const Vec3 in = s.tangent(w, s.point[curve.vertices[back]] - s.point[w]);
   const std::vector<Vec3>& directions = layout.attractor_directions[i];
   const double spacing = 2 * kPi / static_cast<double>(directions.size());
@@ -365,8 +366,11 @@ const Vec3* arrival_direction(const Surface& s, const Layout& layout, const Curv
   const Vec3* nearest = nullptr;
   double best = std::cos(layout.arrival_snap * spacing);
   for (const Vec3& d : directions)
-    if (in.dot(d) > best && !direction_taken(s, layout, w, d, half)) best = in.dot(d), nearest = &d;
-  return nearest;
+    if (layout.arrival_snap > 0 && in.dot(d) > best && !direction_taken(s, layout, w, d, half))
+      best = in.dot(d), nearest = &d;
+  if (!nearest && !layout.arrival_chord) return false;
+  *out = nearest ? *nearest : in;
+  return true;
 }
 
 // The shortest path from v to attractor i (vertex a) along free edges (on no curve, beside
@@ -527,10 +531,10 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
     if ((layout.claimed[w] && !cross) || own) {
       const int c = static_cast<int>(layout.curves.size());
       // Arriving at a singular vertex along one of its free separatrix directions: that
-      // direction is taken (the singularity's own separatrix is not traced beside it).
-      if (!own)
-        if (const Vec3* along = arrival_direction(s, layout, curve))
-          curve.direction.back() = -*along;
+      // direction is taken (the singularity's own separatrix is not traced beside it);
+      // further off one, the chord it comes in along is.
+      Vec3 along;
+      if (!own && arrival_direction(s, layout, curve, &along)) curve.direction.back() = -along;
       layout.curves.push_back(curve);
       register_curve(s, layout, c);
       layout.node[vertex] = 1;
@@ -724,6 +728,7 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
   }
   for (int a : layout.attractors) layout.claimed[a] = 1;
   layout.arrival_snap = options.arrival_snap;
+  layout.arrival_chord = options.arrival_chord;
   layout.allow_crossing = options.cross_separatrices;
   layout.merge_parallel = options.join_parallel ? options.join_parallel_distance / options.density : 0;
   int missing = 0;

@@ -834,18 +834,21 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
     EXPECT_NEAR(mesh.point(mesh.vertex_handle(v))[1], 1.8, 1e-9);  // straight past it
 }
 
-// A walk that ends on a singular vertex takes the separatrix direction it arrives along
-// (QuadOptions::arrival_snap), not the field's direction on the last fan face: around a
-// singularity that can be more than half the spacing off, and the direction it filled
-// then looked free, so a second walk came in beside the first (or the singularity's own
-// separatrix was traced beside it): a sixth spoke at a valence-5 vertex.
-TEST(Quad, AWalkArrivingAtASingularityTakesTheSeparatrixDirectionItFills) {
+// Two walks along +x towards a singular vertex at (2, 2) on a flat grid (spacing 0.1),
+// whose fan's field is turned 50° and whose separatrix directions are `directions`, with a
+// barrier at x = 3: from (1, 2) and then from (1, 1.9). The ends of both (-1: not traced)
+// and the direction the first recorded at the singular vertex, pointing out of it.
+struct TwoWalks {
+  int first = -1, second = -1;
+  Vec3 recorded = Vec3::Zero();
+};
+TwoWalks two_walks_to_a_singularity(const std::vector<Vec3>& directions, double snap, bool chord) {
   const int n = 41;
   FlatGrid flat(n, 0.1);
   const TriMesh& mesh = flat.mesh;
   auto vertex = [&](int i, int j) { return i * n + j; };
-  const int singular = vertex(20, 20);  // (2, 2)
-  const double turned = 50 * M_PI / 180;  // the fan's field
+  const int singular = vertex(20, 20);
+  const double turned = 50 * M_PI / 180;
   for (auto fh : mesh.vf_range(mesh.vertex_handle(singular)))
     flat.field.direction.row(fh.idx()) << std::cos(turned), std::sin(turned), 0;
   const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
@@ -854,36 +857,64 @@ TEST(Quad, AWalkArrivingAtASingularityTakesTheSeparatrixDirectionItFills) {
     for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
     return out;
   };
-  const std::vector<Vec3> directions = valence5_directions(190);  // one 10° below −x
-  struct Ends { int first, second; Vec3 recorded; };
-  auto two_walks = [&](double snap) {
-    quad_detail::Layout layout = barrier_and_singularity(s, n, singular, directions);  // x = 3
-    layout.arrival_snap = snap;
-    Ends ends{-1, -1, Vec3::Zero()};
-    const int first = vertex(20, 10), second = vertex(19, 10);  // (1, 2) and (1, 1.9)
-    if (!quad_detail::trace_direction(s, layout, first, spokes(first), Vec3(1, 0, 0), true))
-      return ends;
-    const quad_detail::Curve& walk = layout.curves.back();
-    ends.first = walk.vertices.back();
-    const auto h = mesh.find_halfedge(mesh.vertex_handle(singular),
-                                      mesh.vertex_handle(walk.vertices[walk.vertices.size() - 2]));
-    ends.recorded = layout.halfedge_dir[h.idx()];
-    if (!quad_detail::trace_direction(s, layout, second, spokes(second), Vec3(1, 0, 0), true))
-      return ends;
-    ends.second = layout.curves.back().vertices.back();
+  quad_detail::Layout layout = barrier_and_singularity(s, n, singular, directions);
+  layout.arrival_snap = snap;
+  layout.arrival_chord = chord;
+  TwoWalks ends;
+  const int first = vertex(20, 10), second = vertex(19, 10);
+  if (!quad_detail::trace_direction(s, layout, first, spokes(first), Vec3(1, 0, 0), true))
     return ends;
-  };
-  const Ends snapped = two_walks(0.25);
-  ASSERT_EQ(snapped.first, singular);
+  const quad_detail::Curve& walk = layout.curves.back();
+  ends.first = walk.vertices.back() == singular ? 0 : walk.vertices.back();
+  const auto h = mesh.find_halfedge(mesh.vertex_handle(singular),
+                                    mesh.vertex_handle(walk.vertices[walk.vertices.size() - 2]));
+  ends.recorded = layout.halfedge_dir[h.idx()];
+  if (!quad_detail::trace_direction(s, layout, second, spokes(second), Vec3(1, 0, 0), true))
+    return ends;
+  const int end = layout.curves.back().vertices.back();
+  ends.second = end == singular ? 0 : static_cast<int>(std::lround(mesh.point(mesh.vertex_handle(end))[0] * 10));
+  return ends;
+}
+
+// A walk that ends on a singular vertex takes the separatrix direction it arrives along
+// (QuadOptions::arrival_snap), not the field's direction on the last fan face: around a
+// singularity that can be more than half the spacing off, and the direction it filled
+// then looked free, so a second walk came in beside the first (or the singularity's own
+// separatrix was traced beside it): a sixth spoke at a valence-5 vertex. With the
+// directions 10° off the walk (within a quarter of the 72° spacing). Ends: 0 the singular
+// vertex, else the x of the end × 10 (30: the barrier).
+TEST(Quad, AWalkArrivingAtASingularityTakesTheSeparatrixDirectionItFills) {
+  const std::vector<Vec3> directions = valence5_directions(190);  // one 10° below −x
+  const TwoWalks snapped = two_walks_to_a_singularity(directions, 0.25, false);
+  ASSERT_EQ(snapped.first, 0);
   EXPECT_NEAR(snapped.recorded.dot(directions[0]), 1.0, 1e-9);
-  ASSERT_GE(snapped.second, 0);
-  EXPECT_NE(snapped.second, singular);  // the direction is taken: it goes past, to x = 3
-  EXPECT_NEAR(mesh.point(mesh.vertex_handle(snapped.second))[0], 3.0, 1e-9);
+  EXPECT_EQ(snapped.second, 30);  // the direction is taken: it goes past, to x = 3
   // Without: the first walk's direction there is recorded 50° off, and the second comes in too.
-  const Ends field = two_walks(0);
-  ASSERT_EQ(field.first, singular);
+  const TwoWalks field = two_walks_to_a_singularity(directions, 0, false);
+  ASSERT_EQ(field.first, 0);
   EXPECT_LT(field.recorded.dot(directions[0]), std::cos(0.5 * 72 * M_PI / 180));
-  EXPECT_EQ(field.second, singular);
+  EXPECT_EQ(field.second, 0);
+}
+
+// Further off the nearest free direction than arrival_snap (25° of the 72° spacing), the
+// walk records the chord it comes in along (QuadOptions::arrival_chord): the direction
+// 25° off then counts as taken, and the second walk goes past to the barrier. Recording
+// the field's direction (50° off) instead, the second walk comes in too; snapping at 0.4
+// of the spacing takes the direction itself.
+TEST(Quad, AWalkArrivingBetweenSeparatrixDirectionsRecordsItsChord) {
+  const std::vector<Vec3> directions = valence5_directions(205);  // one 25° below −x
+  const TwoWalks chord = two_walks_to_a_singularity(directions, 0.25, true);
+  ASSERT_EQ(chord.first, 0);
+  EXPECT_NEAR(chord.recorded.dot(Vec3(-1, 0, 0)), 1.0, 1e-9);
+  EXPECT_EQ(chord.second, 30);
+  const TwoWalks field = two_walks_to_a_singularity(directions, 0.25, false);
+  ASSERT_EQ(field.first, 0);
+  EXPECT_LT(field.recorded.dot(directions[0]), std::cos(0.5 * 72 * M_PI / 180));
+  EXPECT_EQ(field.second, 0);
+  const TwoWalks snapped = two_walks_to_a_singularity(directions, 0.4, true);
+  ASSERT_EQ(snapped.first, 0);
+  EXPECT_NEAR(snapped.recorded.dot(directions[0]), 1.0, 1e-9);
+  EXPECT_EQ(snapped.second, 30);
 }
 
 // On long thin triangles along the walk (spacing 0.1 along x, 0.03 across), a walk along
@@ -1505,8 +1536,8 @@ QuadResult requested_net4_cage(const Partitioned& r, const CrossField& field,
 // price 2. At h = 0.12, the scene before, the margin had shrunk to 13 against 14 since the
 // splits round singular vertices; 25 nets at h 0.1-0.14, the layout choices included:
 // 297 against 625). The layout as it was traced when this was measured: with arrivals
-// taking the separatrix direction they fill (QuadOptions::arrival_snap) this net's
-// requested layout leaves 4 either way.
+// taking the separatrix direction they fill (QuadOptions::arrival_snap, arrival_chord)
+// this net's requested layout leaves 4 either way.
 TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1517,6 +1548,7 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
         [&](QuadOptions& o) {
           o.global_corners = together;
           o.arrival_snap = 0;
+          o.arrival_chord = false;
         },
         together ? "net 4x4, corners together" : "net 4x4, corners alone");
     ASSERT_EQ(result.stats.size(), 1u);
@@ -1535,19 +1567,20 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
 // opposite sign) lets later rounds cancel them: fewer irregular vertices off singularities
 // and fewer irregular vertices than placing without it (measured: 9 against 13 off
 // singularities, 168 against 171 irregular). These three runs trace the layout as it was
-// when this was measured (arrival_snap 0). A fourth, with the default arrival_snap (a curve
-// arriving at a singular vertex takes the separatrix direction it fills, so fewer spokes
-// are traced beside it), leaves fewer still (measured: 3; 11 / 3 / 3 for the three runs
-// with it, the layout's extra spokes gone and with them most of what placing and drawing
-// mend). One scene for the four runs.
+// when this was measured (arrival_snap 0, arrival_chord false). A fourth, with the
+// defaults (a curve arriving at a singular vertex takes the separatrix direction it fills,
+// or further off records its chord, so fewer spokes are traced beside it), leaves fewer
+// still (measured: 5, skewed quads 95 → 13; with arrival_snap alone 3, and 11 / 3 / 3 for
+// the three runs with it, the layout's extra spokes gone and with them most of what
+// placing and drawing mend). One scene for the four runs.
 TEST(Quad, IrregularVerticesArePlacedOnANet) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
-  struct Run { bool place, draw; double snap; const char* label; };
-  const Run runs[4] = {{false, false, 0, "net 4x4, not placed"},
-                       {true, false, 0, "net 4x4, placed, pairs not drawn together"},
-                       {true, true, 0, "net 4x4, placed, pairs drawn together"},
-                       {true, true, QuadOptions{}.arrival_snap, "net 4x4, arrivals snapped"}};
+  struct Run { bool place, draw, arrivals; const char* label; };
+  const Run runs[4] = {{false, false, false, "net 4x4, not placed"},
+                       {true, false, false, "net 4x4, placed, pairs not drawn together"},
+                       {true, true, false, "net 4x4, placed, pairs drawn together"},
+                       {true, true, true, "net 4x4, arrivals snapped"}};
   QuadStats stats[4];
   for (int k = 0; k < 4; ++k) {
     const QuadResult result = requested_net4_cage(
@@ -1555,7 +1588,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
         [&](QuadOptions& o) {
           o.place_irregulars = runs[k].place;
           o.draw_pairs_together = runs[k].draw;
-          o.arrival_snap = runs[k].snap;
+          if (!runs[k].arrivals) o.arrival_snap = 0, o.arrival_chord = false;
         },
         runs[k].label);
     ASSERT_EQ(result.stats.size(), 1u);
@@ -2166,7 +2199,9 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
 // requested layout alone: the fallback cage). The
 // patches under those quads are merged with a neighbour and the layout filled again: one
 // round gives a valid field-aligned cage, said in the notes. (Before the refinement round
-// singular vertices, the 5 x 5 net at h = 0.12 showed it; layouts move with such changes.)
+// singular vertices, the 5 x 5 net at h = 0.12 showed it; layouts move with such changes:
+// with arrivals recording their chord, QuadOptions::arrival_chord, this layout has no
+// tangle, so it is traced as it was.)
 TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 6)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -2175,6 +2210,7 @@ TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
     options.parallel_choices = 1;
     options.work_per_component = 0;  // the requested layout only, then the fallback
     options.max_tangle_rounds = tangle_rounds;
+    options.arrival_chord = false;
     return extract_cages(r.mesh, r.partition, field, options, Context());
   };
   const QuadResult without = requested(0);
@@ -2300,6 +2336,7 @@ TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
   QuadOptions corners_alone;  // the layout as it was traced and read when this was measured
   corners_alone.global_corners = false;
   corners_alone.arrival_snap = 0;
+  corners_alone.arrival_chord = false;
   const NetThreeLayout net(corners_alone);
   const quad_detail::PatchLayout& built = net.built;
   auto solve = [&](double gap, double seconds) {

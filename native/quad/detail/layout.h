@@ -122,6 +122,7 @@ struct Layout {
   double length_cap = 0;             // traces cross others only before this length
   double merge_parallel = 0;         // join a nearly parallel curve closer than this × size
   double arrival_snap = 0;           // QuadOptions::arrival_snap (0: off)
+  bool arrival_chord = false;        // QuadOptions::arrival_chord
   int parallel_joins = 0;
   // Cusp sectors (by outgoing halfedge) read as quarter turns after all, because the
   // layout did not balance with them (straighten_cusps).
