@@ -734,13 +734,8 @@ void trace_separatrices(const Surface& s, Layout& layout, const QuadOptions& opt
   int missing = 0;
   for (const auto& round : rounds)
     for (const Start& start : round) {
-      bool taken = false;
-      for (int h : start.spokes)
-        if (layout.edge_curve[h >> 1] >= 0 &&
-            std::acos(std::clamp(layout.halfedge_dir[h].dot(start.direction), -1.0, 1.0)) <
-                0.5 * start.spacing)
-          taken = true;
-      if (taken) continue;
+      if (direction_taken(s, layout, start.vertex, start.direction, std::cos(0.5 * start.spacing)))
+        continue;
       missing += !trace_direction(s, layout, start.vertex, start.spokes, start.direction, true);
     }
   layout.allow_crossing = false;
