@@ -783,6 +783,13 @@ quad_detail::Layout barrier_and_singularity(const quad_detail::Surface& s, int n
   return layout;
 }
 
+// The outgoing halfedges of vertex v: every first step a walk from v may take.
+std::vector<int> spokes_of(const TriMesh& mesh, int v) {
+  std::vector<int> out;
+  for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
+  return out;
+}
+
 // A valence-5 singularity's separatrix directions in the xy plane, the first at `degrees`.
 std::vector<Vec3> valence5_directions(double degrees) {
   std::vector<Vec3> directions;
@@ -815,18 +822,13 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
     }
     return layout;
   };
-  auto spokes = [&](int v) {
-    std::vector<int> out;
-    for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
-    return out;
-  };
   const int start = vertex(18, 10);  // (1, 1.8): would pass 0.2 beside the singularity
   quad_detail::Layout free = fresh_layout(false);
-  ASSERT_TRUE(quad_detail::trace_direction(s, free, start, spokes(start), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(quad_detail::trace_direction(s, free, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   EXPECT_EQ(free.curves.back().vertices.back(), singular);
 
   quad_detail::Layout taken = fresh_layout(true);
-  ASSERT_TRUE(quad_detail::trace_direction(s, taken, start, spokes(start), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(quad_detail::trace_direction(s, taken, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   const int end = taken.curves.back().vertices.back();
   EXPECT_NE(end, singular);
   EXPECT_NEAR(mesh.point(mesh.vertex_handle(end))[0], 3.0, 1e-9);  // on the barrier
@@ -836,8 +838,9 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
 
 // Two walks along +x towards a singular vertex at (2, 2) on a flat grid (spacing 0.1),
 // whose fan's field is turned 50° and whose separatrix directions are `directions`, with a
-// barrier at x = 3: from (1, 2) and then from (1, 1.9). The ends of both (-1: not traced)
-// and the direction the first recorded at the singular vertex, pointing out of it.
+// barrier at x = 3: from (1, 2) and then from (1, 1.9). The ends of both (0: the singular
+// vertex, else the end's x × 10; -1: not traced) and the direction the first recorded at
+// the singular vertex, pointing out of it.
 struct TwoWalks {
   int first = -1, second = -1;
   Vec3 recorded = Vec3::Zero();
@@ -852,27 +855,24 @@ TwoWalks two_walks_to_a_singularity(const std::vector<Vec3>& directions, double 
   for (auto fh : mesh.vf_range(mesh.vertex_handle(singular)))
     flat.field.direction.row(fh.idx()) << std::cos(turned), std::sin(turned), 0;
   const quad_detail::Surface s(mesh, flat.partition, flat.field, 0);
-  auto spokes = [&](int v) {
-    std::vector<int> out;
-    for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
-    return out;
-  };
   quad_detail::Layout layout = barrier_and_singularity(s, n, singular, directions);
   layout.arrival_snap = snap;
   layout.arrival_chord = chord;
+  auto end_of = [&](int v) {  // 0 the singular vertex, else its x × 10
+    return v == singular ? 0 : static_cast<int>(std::lround(mesh.point(mesh.vertex_handle(v))[0] * 10));
+  };
   TwoWalks ends;
   const int first = vertex(20, 10), second = vertex(19, 10);
-  if (!quad_detail::trace_direction(s, layout, first, spokes(first), Vec3(1, 0, 0), true))
+  if (!quad_detail::trace_direction(s, layout, first, spokes_of(mesh, first), Vec3(1, 0, 0), true))
     return ends;
   const quad_detail::Curve& walk = layout.curves.back();
-  ends.first = walk.vertices.back() == singular ? 0 : walk.vertices.back();
+  ends.first = end_of(walk.vertices.back());
   const auto h = mesh.find_halfedge(mesh.vertex_handle(singular),
                                     mesh.vertex_handle(walk.vertices[walk.vertices.size() - 2]));
   ends.recorded = layout.halfedge_dir[h.idx()];
-  if (!quad_detail::trace_direction(s, layout, second, spokes(second), Vec3(1, 0, 0), true))
+  if (!quad_detail::trace_direction(s, layout, second, spokes_of(mesh, second), Vec3(1, 0, 0), true))
     return ends;
-  const int end = layout.curves.back().vertices.back();
-  ends.second = end == singular ? 0 : static_cast<int>(std::lround(mesh.point(mesh.vertex_handle(end))[0] * 10));
+  ends.second = end_of(layout.curves.back().vertices.back());
   return ends;
 }
 
@@ -933,9 +933,8 @@ TEST(Quad, AWalkOneRowBesideASingularityReachesIt) {
   quad_detail::Layout layout = barrier_and_singularity(  // barrier at x = 3
       s, n, singular, {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(-1, 0, 0), Vec3(0, -1, 0)});
   const int start = vertex(21, 10);  // (1, 0.63)
-  std::vector<int> spokes;
-  for (auto oh : mesh.voh_range(mesh.vertex_handle(start))) spokes.push_back(oh.idx());
-  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes, Vec3(1, 0, 0), true));
+  ASSERT_TRUE(
+      quad_detail::trace_direction(s, layout, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   const std::vector<int>& walked = layout.curves.back().vertices;
   EXPECT_EQ(walked.back(), singular);
   // Off its row only within the last target edge before the singular vertex.
@@ -967,18 +966,13 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
     for (int c : {0, 1}) quad_detail::register_curve(s, layout, c);
     return layout;
   };
-  auto spokes = [&](int v) {
-    std::vector<int> out;
-    for (auto oh : mesh.voh_range(mesh.vertex_handle(v))) out.push_back(oh.idx());
-    return out;
-  };
   auto y_of = [&](int v) { return mesh.point(mesh.vertex_handle(v))[1]; };
   auto x_of = [&](int v) { return mesh.point(mesh.vertex_handle(v))[0]; };
 
   quad_detail::Layout layout = fresh_layout();
   layout.merge_parallel = 0.3;
   const int start = vertex(22, 5);
-  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes(start), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   ASSERT_EQ(layout.curves.size(), 4u);
   EXPECT_EQ(layout.parallel_joins, 1);
   const quad_detail::Curve& walk = layout.curves[2];
@@ -997,14 +991,14 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   EXPECT_LT(std::abs(link.direction.front().dot(Vec3(1, 0, 0))), 0.1);
 
   const int far = vertex(26, 5);
-  ASSERT_TRUE(quad_detail::trace_direction(s, layout, far, spokes(far), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, far, spokes_of(mesh, far), Vec3(1, 0, 0), true));
   EXPECT_EQ(layout.parallel_joins, 1);
   EXPECT_NEAR(x_of(layout.curves.back().vertices.back()), 3.0, 1e-9);  // on the barrier
   EXPECT_FALSE(layout.curves.back().link);
 
   quad_detail::Layout off = fresh_layout();
   const int below = vertex(18, 5);
-  ASSERT_TRUE(quad_detail::trace_direction(s, off, below, spokes(below), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(quad_detail::trace_direction(s, off, below, spokes_of(mesh, below), Vec3(1, 0, 0), true));
   EXPECT_EQ(off.parallel_joins, 0);
   ASSERT_EQ(off.curves.size(), 3u);
   EXPECT_NEAR(x_of(off.curves.back().vertices.back()), 3.0, 1e-9);
@@ -1614,9 +1608,8 @@ TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   quad_detail::Layout layout = bounded_square_layout(s, n, grid_curve(n, 20, 0, 20, 40));
   layout.merge_parallel = 0.3;
   const int start = vertex(22, 0);
-  std::vector<int> spokes;
-  for (auto oh : flat.mesh.voh_range(flat.mesh.vertex_handle(start))) spokes.push_back(oh.idx());
-  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes, Vec3(1, 0, 0), true));
+  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes_of(flat.mesh, start),
+                                          Vec3(1, 0, 0), true));
   ASSERT_EQ(layout.parallel_joins, 1);
   ASSERT_EQ(layout.curves.size(), 7u);
   const int link_curve = 6;
