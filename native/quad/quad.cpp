@@ -904,11 +904,11 @@ namespace {
 // One component. The layout depends on a few discrete choices (how corners are read,
 // whether separatrices join nearly parallel curves, which singularity pairs cancel, which
 // singularities the boundary absorbs, whether separatrices cross, whether unbalanced
-// patches are merged). They are tried in turn, each from scratch (a layout equal to an
-// earlier one is not filled again), until a cage meets
-// the targets with a margin and has no irregular vertex away from the field's singularities
-// (comfortably_meets_targets), or until the work budget after the first cage that meets them
-// is spent (QuadOptions::work_after_meeting). Kept: among the cages meeting the targets, preferably one
+// patches are merged, what a curve arriving at a singularity records). They are tried in
+// turn, each from scratch (a layout equal to an earlier one is not filled again), until a
+// cage meets the targets with a margin and has no irregular vertex away from the field's
+// singularities (comfortably_meets_targets), or until the work budget after the first cage
+// that meets them is spent (QuadOptions::work_after_meeting, min_choices_after_meeting). Kept: among the cages meeting the targets, preferably one
 // that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit
 // surface can fold), then the fewest irregular vertices away from the field's
 // singularities (counts within 15% or 2 even, unless one is none), then the fewest skewed
@@ -973,6 +973,17 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         }
         variants.push_back({name, o});
       }
+  // The requested layout with its arrivals recorded the other way (QuadOptions::
+  // arrival_chord) comes second, so that it runs beside the requested one and is compared
+  // with it on every component (min_choices_after_meeting).
+  {
+    QuadOptions o = variants[0].options;
+    o.arrival_chord = !o.arrival_chord;
+    variants.insert(variants.begin() + 1,
+                    {o.arrival_chord ? "arrivals recording their chord"
+                                     : "arrivals recording the field's direction",
+                     o});
+  }
   const quad_detail::Surface coarse(design, partition, field, c);
   // Raise the density where singularities are dense (QuadOptions::vertices_per_singular_quarter).
   const double raise = density_raise(coarse, options);
@@ -1023,11 +1034,13 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   std::optional<QuadStats> requested_stats;
   quad_detail::Messages best_messages;
   // Once a cage meets the targets, more choices are tried only within a work budget:
-  // choices × the (refined) component's triangles (QuadOptions::work_after_meeting),
-  // counting only choices that traced a new layout (a repeated one stops after tracing).
+  // choices × the (refined) component's triangles (QuadOptions::work_after_meeting), but
+  // at least min_choices_after_meeting, counting only choices that traced a new layout (a
+  // repeated one stops after tracing).
   int first_meeting = -1, tried_after_meeting = 0;
   const int choices_after_meeting =
-      static_cast<int>(options.work_after_meeting / std::max(1, triangles));
+      std::max(options.min_choices_after_meeting,
+               static_cast<int>(options.work_after_meeting / std::max(1, triangles)));
   // The work the attempts spent, summed in choice order (QuadOptions::work_per_component).
   double work_spent = 0;
   auto out_of_work = [&](size_t tried) {

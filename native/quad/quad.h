@@ -209,6 +209,17 @@ struct QuadOptions {
   // no irregular vertex away from singularities. 6e5: all
   // choices on components of ≤ 25k triangles, 3 on lattice's 190k.
   double work_after_meeting = 6e5;
+  // Choices tried after the first one that meets the targets however large the component
+  // (work_after_meeting allows none over 600k triangles). The second choice is the
+  // requested layout with arrival_chord flipped, and it runs beside the requested one on
+  // a second thread: on two cores it costs processor time, not wall time (genus 64 at
+  // h 0.1 / 0.12 / 0.14: 28 / 27 / 13 s against 30 / 25 / 15 s). The layout depends
+  // chaotically on such a choice (bench/quad_sweep's nets: a different chord length gave
+  // 175 → 223 irregular vertices off singularities, single nets 6 → 26 and 15 → 5), so of two
+  // the better is kept: 25 nets (genus 9–49, h 0.1–0.14) 175 → 151 off singularities,
+  // oversized quads 1465 → 1297; genus 64 84 → 65, oversized 1108 → 834. 0: as the
+  // budget allows.
+  int min_choices_after_meeting = 1;
   // Quantization's integer program stops once its solution is provably within this
   // fraction of the optimal cost (GLPK's mip_gap). A genus-64 net's programs (7–8k arcs)
   // then stop in 2–4 s instead of running into the time limit (below) at a gap of 0.1%,

@@ -2155,6 +2155,55 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsWorkIsSpent) {
   }
 }
 
+// A component too large for any choice after the first that meets the targets
+// (QuadOptions::work_after_meeting) still has its requested layout compared with the one
+// whose arrivals record the other direction (min_choices_after_meeting, arrival_chord),
+// and keeps the better. On the 3 × 3 net at h = 0.1 the requested layout alone leaves a
+// quad collapsed; the layout recording the field's direction leaves none, and is kept.
+TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  QuadOptions options;
+  options.work_after_meeting = 0;  // as on a component of millions of triangles
+  auto alone = [&](bool chord) {
+    QuadOptions o = options;
+    o.min_choices_after_meeting = 0;
+    o.arrival_chord = chord;
+    return extract_cages(r.mesh, r.partition, field, o, Context());
+  };
+  auto kept_another = [](const QuadResult& result) {
+    return std::any_of(result.notes.begin(), result.notes.end(), [](const std::string& d) {
+      return d.find("uses the layout with") != std::string::npos;
+    });
+  };
+  const QuadResult chord = alone(true), field_direction = alone(false), both =
+      extract_cages(r.mesh, r.partition, field, options, Context());
+  for (const QuadResult* result : {&chord, &field_direction, &both}) {
+    ASSERT_EQ(result->cages.size(), 1u);
+    EXPECT_EQ(check_cage(result->cages[0], r), 0);
+  }
+  // Each alone is the requested layout, and meets the targets (so nothing else is tried).
+  ASSERT_FALSE(kept_another(chord));
+  ASSERT_FALSE(kept_another(field_direction));
+  expect_targets("chord", chord.stats[0]);
+  expect_targets("field's direction", field_direction.stats[0]);
+  std::printf("[quad] net 3x3, h 0.1: chord %d off, %d collapsed; field's direction %d off, %d collapsed\n",
+              chord.stats[0].irregular_off_singularities, chord.stats[0].collapsed_quads,
+              field_direction.stats[0].irregular_off_singularities,
+              field_direction.stats[0].collapsed_quads);
+  ASSERT_NE(chord.cages[0].vertices, field_direction.cages[0].vertices);
+  ASSERT_TRUE(quad_detail::better_cage(field_direction.stats[0], chord.stats[0]));
+  EXPECT_GT(chord.stats[0].collapsed_quads, 0);
+  EXPECT_EQ(field_direction.stats[0].collapsed_quads, 0);
+  // Together: the better one, said in the notes.
+  EXPECT_EQ(both.cages[0].quads, field_direction.cages[0].quads);
+  EXPECT_EQ(both.stats[0].collapsed_quads, 0);
+  EXPECT_TRUE(std::any_of(both.notes.begin(), both.notes.end(), [](const std::string& d) {
+    return d.find("uses the layout with arrivals recording the field's direction") !=
+           std::string::npos;
+  }));
+}
+
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
 // singularities) gets a field-aligned cage that meets the targets, every loop one chain,
 // the cage has the component's genus (V − E + F = 2 − 2g − loops), and every separatrix
