@@ -212,8 +212,9 @@ struct QuadOptions {
   // Choices tried after the first one that meets the targets however large the component
   // (work_after_meeting allows none over 600k triangles). The second choice is the
   // requested layout with arrival_chord flipped, and it runs beside the requested one on
-  // a second thread: on two cores it costs processor time, not wall time (genus 64 at
-  // h 0.1 / 0.12 / 0.14: 28 / 27 / 13 s against 30 / 25 / 15 s). The layout depends
+  // a second thread: on two cores it costs wall time only where it takes longer (genus 64
+  // at h 0.12 alone: quad 11.7 → 16.5 s; the genus-36 net's requested layout has every
+  // irregular vertex at a singularity, so its search stops there: 8.2 s). The layout depends
   // chaotically on such a choice (bench/quad_sweep's nets: a different chord length gave
   // 175 → 223 irregular vertices off singularities, single nets 6 → 26 and 15 → 5), so of two
   // the better is kept: 25 nets (genus 9–49, h 0.1–0.14) 175 → 151 off singularities,
