@@ -206,6 +206,12 @@ void expect_targets(const std::string& name, const QuadStats& s) {
   EXPECT_EQ(s.degenerate_quads, 0) << name;
 }
 
+// Whether one of a result's notes or diagnostics contains `text`.
+bool says(const std::vector<std::string>& lines, const std::string& text) {
+  return std::any_of(lines.begin(), lines.end(),
+                     [&](const std::string& line) { return line.find(text) != std::string::npos; });
+}
+
 // Every face of `mesh` in one organic component.
 Partition one_component(const TriMesh& mesh) {
   Partition partition;
@@ -1587,10 +1593,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
         runs[k].label);
     ASSERT_EQ(result.stats.size(), 1u);
     stats[k] = result.stats[0];
-    const bool noted = std::any_of(result.notes.begin(), result.notes.end(), [](const std::string& n) {
-      return n.find("moved irregular vertices onto the singularities") != std::string::npos;
-    });
-    EXPECT_EQ(noted, runs[k].place);
+    EXPECT_EQ(says(result.notes, "moved irregular vertices onto the singularities"), runs[k].place);
   }
   EXPECT_LT(stats[2].irregular_off_singularities, stats[0].irregular_off_singularities);
   EXPECT_LT(stats[2].irregular_off_singularities, stats[1].irregular_off_singularities);
@@ -2036,13 +2039,8 @@ TEST(Quad, DenseSingularitiesRaiseTheDensity) {
   const QuadResult raised = extract_cages(r.mesh, r.partition, field, options, Context());
   ASSERT_EQ(plain.cages.size(), 1u);
   ASSERT_EQ(raised.cages.size(), 1u);
-  const auto reports_raise = [](const QuadResult& result) {
-    for (const auto& d : result.notes)
-      if (d.find("density raised") != std::string::npos) return true;
-    return false;
-  };
-  EXPECT_FALSE(reports_raise(plain));
-  EXPECT_TRUE(reports_raise(raised));
+  EXPECT_FALSE(says(plain.notes, "density raised"));
+  EXPECT_TRUE(says(raised.notes, "density raised"));
   std::printf("[quad] sphere: %d cage vertices, %d with 200 per quarter turn\n",
               plain.stats[0].vertices, raised.stats[0].vertices);
   EXPECT_LT(plain.stats[0].vertices, 1600);
@@ -2091,8 +2089,7 @@ TEST(Quad, FallbackCageWhenNoLayoutWorks) {
               s.quads, 100 * s.interior_valence4_fraction(), 100 * s.boundary_valence3_fraction(),
               s.mean_angle_deviation_deg, s.seconds);
   EXPECT_TRUE(s.fallback);
-  EXPECT_TRUE(std::any_of(result.diagnostics.begin(), result.diagnostics.end(),
-                          [](const std::string& d) { return d.find("FALLBACK") != std::string::npos; }));
+  EXPECT_TRUE(says(result.diagnostics, "FALLBACK"));
   EXPECT_EQ(check_cage(result.cages[0], r), 0);
   EXPECT_EQ(s.flipped_quads, 0);
   EXPECT_EQ(s.degenerate_quads, 0);
@@ -2113,9 +2110,7 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsWorkIsSpent) {
   const Partitioned r = relaxed(partition_scene(bolt_hole_scene(0.05)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   auto stopped = [](const QuadResult& result) {
-    return std::any_of(result.diagnostics.begin(), result.diagnostics.end(), [](const std::string& d) {
-      return d.find("stopped trying layout choices") != std::string::npos;
-    });
+    return says(result.diagnostics, "stopped trying layout choices");
   };
   QuadOptions options;
   options.max_fix_rounds = 0;
@@ -2171,11 +2166,6 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
     o.arrival_chord = chord;
     return extract_cages(r.mesh, r.partition, field, o, Context());
   };
-  auto kept_another = [](const QuadResult& result) {
-    return std::any_of(result.notes.begin(), result.notes.end(), [](const std::string& d) {
-      return d.find("uses the layout with") != std::string::npos;
-    });
-  };
   const QuadResult chord = alone(true), field_direction = alone(false), both =
       extract_cages(r.mesh, r.partition, field, options, Context());
   for (const QuadResult* result : {&chord, &field_direction, &both}) {
@@ -2183,8 +2173,8 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
     EXPECT_EQ(check_cage(result->cages[0], r), 0);
   }
   // Each alone is the requested layout, and meets the targets (so nothing else is tried).
-  ASSERT_FALSE(kept_another(chord));
-  ASSERT_FALSE(kept_another(field_direction));
+  ASSERT_FALSE(says(chord.notes, "uses the layout with"));
+  ASSERT_FALSE(says(field_direction.notes, "uses the layout with"));
   expect_targets("chord", chord.stats[0]);
   expect_targets("field's direction", field_direction.stats[0]);
   std::printf("[quad] net 3x3, h 0.1: chord %d off, %d collapsed; field's direction %d off, %d collapsed\n",
@@ -2198,10 +2188,7 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
   // Together: the better one, said in the notes.
   EXPECT_EQ(both.cages[0].quads, field_direction.cages[0].quads);
   EXPECT_EQ(both.stats[0].collapsed_quads, 0);
-  EXPECT_TRUE(std::any_of(both.notes.begin(), both.notes.end(), [](const std::string& d) {
-    return d.find("uses the layout with arrivals recording the field's direction") !=
-           std::string::npos;
-  }));
+  EXPECT_TRUE(says(both.notes, "uses the layout with arrivals recording the field's direction"));
 }
 
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
@@ -2270,9 +2257,7 @@ TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
   EXPECT_FALSE(with.stats[0].fallback);
   EXPECT_EQ(check_cage(with.cages[0], r), 0);
   expect_targets("net 6x6 after the tangle's patches merged", with.stats[0]);
-  bool noted = false;
-  for (const auto& n : with.notes) noted |= n.find("left turned over merged") != std::string::npos;
-  EXPECT_TRUE(noted);
+  EXPECT_TRUE(says(with.notes, "left turned over merged"));
   std::printf("[quad] net 6x6 requested layout: %d quads, %d irregular (%d off singularities), "
               "%.2f deg\n",
               with.stats[0].quads, with.stats[0].irregular_vertices,
@@ -2454,9 +2439,7 @@ TEST(Quad, ChoicesRunInParallelKeepTheSequentialResult) {
       return kept;
     };
     EXPECT_EQ(notes(one), notes(two)) << name;
-    EXPECT_TRUE(std::any_of(one.notes.begin(), one.notes.end(), [](const std::string& d) {
-      return d.find("uses the layout with") != std::string::npos;
-    })) << name;
+    EXPECT_TRUE(says(one.notes, "uses the layout with")) << name;
     ASSERT_EQ(one.cages.size(), two.cages.size()) << name;
     ASSERT_FALSE(one.cages.empty()) << name;
     for (size_t c = 0; c < one.cages.size(); ++c) {
