@@ -121,7 +121,9 @@ def result_summary(design_name, result):
 
 
 def to_json(report, notes=()):
-    """The report as JSON (numpy scalars made plain), for storing in a custom property."""
+    """The report as JSON (numpy scalars made plain), for storing in a custom property.
+
+    `notes` (the add-on's own) come first in 'notes', before the stages' notes."""
     def plain(value):
         if isinstance(value, dict):
             return {str(k): plain(v) for k, v in value.items()}
@@ -132,7 +134,7 @@ def to_json(report, notes=()):
         return value
     data = plain(dict(report or {}))
     if notes:
-        data["notes"] = list(notes)
+        data["notes"] = list(notes) + list(data.get("notes") or ())
     return json.dumps(data, sort_keys=True)
 
 

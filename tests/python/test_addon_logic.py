@@ -1,5 +1,6 @@
 """The add-on's bpy-free modules, with plain pytest: /usr/bin/python3 -m pytest tests/python."""
 
+import json
 import os
 import sys
 import threading
@@ -303,6 +304,11 @@ def test_report_json_round_trip_with_numpy_values():
     text = report.to_json(data, ["a note"])
     assert "note: a note" in report.lines_from_json(text)
     assert "  per_solid: 1, 2" in report.lines_from_json(text)
+    # The add-on's notes go before the stages' notes, which are kept (a stored report
+    # says how the cage was made, as the CLI's report.json does).
+    assert json.loads(text)["notes"] == ["a note", "quad: component 0: corners squared"]
+    assert "note: quad: component 0: corners squared" in report.lines_from_json(text)
+    assert json.loads(report.to_json(data))["notes"] == ["quad: component 0: corners squared"]
     assert report.lines_from_json("not json") == []
 
 
