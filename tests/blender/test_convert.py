@@ -37,6 +37,10 @@ def test_convert_writes_partition_collection(open_fixture):
                      "design partition", "design singularities"]
     assert report["composed"]["ok"]
     assert len(collection.objects["design composed"].data.polygons) == report["composed"]["triangles"]
+    # The stored report keeps the stages' notes (how the cages were made) after the
+    # add-on's own, as the CLI's report.json has them.
+    assert report["notes"][0].startswith("grid incidence with the voxel size recorded")
+    assert any(note.startswith("quad: component ") for note in report["notes"])
     # One cage object per cage the pipeline made, shown through its Subdivision Surface.
     assert len(cage_names) == len(report["cages"])
     for name in cage_names:
