@@ -709,7 +709,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
       const std::vector<int> unbalanced = quad_detail::unbalanced_patches(patches);
       for (int p : unbalanced) taken += quad_detail::straighten_cusps(layout, patches, p);
       if (!taken && round < options.max_balance_rounds)
-        for (int p : unbalanced) now += quad_detail::merge_patch(surface, layout, patches, p, &merged_arcs);
+        for (int p : unbalanced)
+          now += quad_detail::merge_patch(surface, layout, patches, p, &merged_arcs);
       GENBREP_CHECK(now + taken > 0, Code::StageFailure,
                     "quad: component " + std::to_string(c) + ": quantization of " +
                         std::to_string(patches.patches.size()) + " patches: " + failure +
@@ -750,7 +751,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);
     int now = 0;
-    for (int p : tangled) now += quad_detail::merge_patch(surface, layout, patches, p, &merged_arcs);
+    for (int p : tangled)
+      now += quad_detail::merge_patch(surface, layout, patches, p, &merged_arcs);
     if (!now) {
       messages->append(layout_messages);
       messages->append(filled_messages);
@@ -908,14 +910,14 @@ namespace {
 // turn, each from scratch (a layout equal to an earlier one is not filled again), until a
 // cage meets the targets with a margin and has no irregular vertex away from the field's
 // singularities (comfortably_meets_targets), or until the work budget after the first cage
-// that meets them is spent (QuadOptions::work_after_meeting, min_choices_after_meeting). Kept: among the cages meeting the targets, preferably one
-// that needed no quad collapsed (a collapse leaves a valence-6 vertex whose pulled limit
-// surface can fold), then the fewest irregular vertices away from the field's
-// singularities (counts within 15% or 2 even, unless one is none), then the fewest skewed
-// quads (within 20% or 5 even), then the fewest irregular vertices (counts within 5% of each other
-// are even), then the smallest mean corner deviation (better_cage); if none meets them, the
-// valid cage with the smallest mean corner deviation.
-// The choice that was used is reported when it is not the requested one.
+// that meets them is spent (QuadOptions::work_after_meeting, min_choices_after_meeting). Kept:
+// among the cages meeting the targets, preferably one that needed no quad collapsed (a collapse
+// leaves a valence-6 vertex whose pulled limit surface can fold), then the fewest irregular
+// vertices away from the field's singularities (counts within 15% or 2 even, unless one is none),
+// then the fewest skewed quads (within 20% or 5 even), then the fewest irregular vertices (counts
+// within 5% of each other are even), then the smallest mean corner deviation (better_cage); if none
+// meets them, the valid cage with the smallest mean corner deviation. The choice that was used is
+// reported when it is not the requested one.
 void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
                        const QuadOptions& options, int c, QuadResult* out) {
   struct Variant { std::string what; QuadOptions options; };

@@ -830,11 +830,13 @@ TEST(Quad, AWalkEndsOnASingularityOnlyAlongAFreeSeparatrixDirection) {
   };
   const int start = vertex(18, 10);  // (1, 1.8): would pass 0.2 beside the singularity
   quad_detail::Layout free = fresh_layout(false);
-  ASSERT_TRUE(quad_detail::trace_direction(s, free, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(
+      quad_detail::trace_direction(s, free, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   EXPECT_EQ(free.curves.back().vertices.back(), singular);
 
   quad_detail::Layout taken = fresh_layout(true);
-  ASSERT_TRUE(quad_detail::trace_direction(s, taken, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(
+      quad_detail::trace_direction(s, taken, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   const int end = taken.curves.back().vertices.back();
   EXPECT_NE(end, singular);
   EXPECT_NEAR(mesh.point(mesh.vertex_handle(end))[0], 3.0, 1e-9);  // on the barrier
@@ -865,7 +867,8 @@ TwoWalks two_walks_to_a_singularity(const std::vector<Vec3>& directions, double 
   layout.arrival_snap = snap;
   layout.arrival_chord = chord;
   auto end_of = [&](int v) {  // 0 the singular vertex, else its x × 10
-    return v == singular ? 0 : static_cast<int>(std::lround(mesh.point(mesh.vertex_handle(v))[0] * 10));
+    return v == singular ? 0
+                         : static_cast<int>(std::lround(mesh.point(mesh.vertex_handle(v))[0] * 10));
   };
   TwoWalks ends;
   const int first = vertex(20, 10), second = vertex(19, 10);
@@ -876,7 +879,8 @@ TwoWalks two_walks_to_a_singularity(const std::vector<Vec3>& directions, double 
   const auto h = mesh.find_halfedge(mesh.vertex_handle(singular),
                                     mesh.vertex_handle(walk.vertices[walk.vertices.size() - 2]));
   ends.recorded = layout.halfedge_dir[h.idx()];
-  if (!quad_detail::trace_direction(s, layout, second, spokes_of(mesh, second), Vec3(1, 0, 0), true))
+  if (!quad_detail::trace_direction(s, layout, second, spokes_of(mesh, second), Vec3(1, 0, 0),
+                                    true))
     return ends;
   ends.second = end_of(layout.curves.back().vertices.back());
   return ends;
@@ -978,7 +982,8 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   quad_detail::Layout layout = fresh_layout();
   layout.merge_parallel = 0.3;
   const int start = vertex(22, 5);
-  ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(
+      quad_detail::trace_direction(s, layout, start, spokes_of(mesh, start), Vec3(1, 0, 0), true));
   ASSERT_EQ(layout.curves.size(), 4u);
   EXPECT_EQ(layout.parallel_joins, 1);
   const quad_detail::Curve& walk = layout.curves[2];
@@ -997,14 +1002,16 @@ TEST(Quad, ASeparatrixBesideAParallelCurveJoinsIt) {
   EXPECT_LT(std::abs(link.direction.front().dot(Vec3(1, 0, 0))), 0.1);
 
   const int far = vertex(26, 5);
-  ASSERT_TRUE(quad_detail::trace_direction(s, layout, far, spokes_of(mesh, far), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(
+      quad_detail::trace_direction(s, layout, far, spokes_of(mesh, far), Vec3(1, 0, 0), true));
   EXPECT_EQ(layout.parallel_joins, 1);
   EXPECT_NEAR(x_of(layout.curves.back().vertices.back()), 3.0, 1e-9);  // on the barrier
   EXPECT_FALSE(layout.curves.back().link);
 
   quad_detail::Layout off = fresh_layout();
   const int below = vertex(18, 5);
-  ASSERT_TRUE(quad_detail::trace_direction(s, off, below, spokes_of(mesh, below), Vec3(1, 0, 0), true));
+  ASSERT_TRUE(
+      quad_detail::trace_direction(s, off, below, spokes_of(mesh, below), Vec3(1, 0, 0), true));
   EXPECT_EQ(off.parallel_joins, 0);
   ASSERT_EQ(off.curves.size(), 3u);
   EXPECT_NEAR(x_of(off.curves.back().vertices.back()), 3.0, 1e-9);
@@ -1612,7 +1619,7 @@ TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   layout.merge_parallel = 0.3;
   const int start = vertex(22, 0);
   ASSERT_TRUE(quad_detail::trace_direction(s, layout, start, spokes_of(flat.mesh, start),
-                                          Vec3(1, 0, 0), true));
+                                           Vec3(1, 0, 0), true));
   ASSERT_EQ(layout.parallel_joins, 1);
   ASSERT_EQ(layout.curves.size(), 7u);
   const int link_curve = 6;
@@ -2166,8 +2173,8 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
     o.arrival_chord = chord;
     return extract_cages(r.mesh, r.partition, field, o, Context());
   };
-  const QuadResult chord = alone(true), field_direction = alone(false), both =
-      extract_cages(r.mesh, r.partition, field, options, Context());
+  const QuadResult chord = alone(true), field_direction = alone(false),
+                   both = extract_cages(r.mesh, r.partition, field, options, Context());
   for (const QuadResult* result : {&chord, &field_direction, &both}) {
     ASSERT_EQ(result->cages.size(), 1u);
     EXPECT_EQ(check_cage(result->cages[0], r), 0);
@@ -2177,10 +2184,11 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
   ASSERT_FALSE(says(field_direction.notes, "uses the layout with"));
   expect_targets("chord", chord.stats[0]);
   expect_targets("field's direction", field_direction.stats[0]);
-  std::printf("[quad] net 3x3, h 0.1: chord %d off, %d collapsed; field's direction %d off, %d collapsed\n",
-              chord.stats[0].irregular_off_singularities, chord.stats[0].collapsed_quads,
-              field_direction.stats[0].irregular_off_singularities,
-              field_direction.stats[0].collapsed_quads);
+  std::printf(
+      "[quad] net 3x3, h 0.1: chord %d off, %d collapsed; field's direction %d off, %d collapsed\n",
+      chord.stats[0].irregular_off_singularities, chord.stats[0].collapsed_quads,
+      field_direction.stats[0].irregular_off_singularities,
+      field_direction.stats[0].collapsed_quads);
   ASSERT_NE(chord.cages[0].vertices, field_direction.cages[0].vertices);
   ASSERT_TRUE(quad_detail::better_cage(field_direction.stats[0], chord.stats[0]));
   EXPECT_GT(chord.stats[0].collapsed_quads, 0);
