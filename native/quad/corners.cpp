@@ -15,9 +15,11 @@
 // its patch and its node), solved exactly by GLPK's out-of-kilter algorithm on integral
 // data; it is the linear program "q_s ∈ [1, 2] per free sector, Σ(2 − q_s) = 4 per patch,
 // Σ q_s + slack = target per node, minimise Σ |angle_s − q_s · 90°| + price · |slack|",
-// whose matrix is totally unimodular. A sector may carry a side cost too (layout.cpp: how
-// far from a rectangle its patch would be, which a flow cannot weigh itself). (That LP through GLPK's simplex took 0.14–0.73 s a
-// round on the 6 x 6 net; the flow about 0.05 s.)
+// whose matrix is totally unimodular. The price is corner_node_price, or off_node_price at
+// the nodes near irregular vertices an earlier cage of the layout left away from
+// singularities (Layout::costly_nodes). A sector may carry a side cost too (layout.cpp: how
+// far from a rectangle its patch would be, which a flow cannot weigh itself). (That LP
+// through GLPK's simplex took 0.14–0.73 s a round on the 6 x 6 net; the flow about 0.05 s.)
 // Complexity: one min-cost flow on (patches + nodes) vertices and (sectors + 2 nodes) arcs.
 #include <glpk.h>
 
@@ -46,7 +48,8 @@ double deviation(double angle, int quarters) {
 }  // namespace
 
 std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int patches,
-                                const std::map<int, int>& node_target, double node_price) {
+                                const std::map<int, int>& node_target, double node_price,
+                                const std::map<int, double>& node_prices) {
   std::vector<int> chosen(sectors.size());
   for (size_t i = 0; i < sectors.size(); ++i) chosen[i] = sectors[i].quarters;
   // Patches whose free sectors can make them turn 4 take part (one graph vertex each); the
@@ -110,8 +113,10 @@ std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int pa
   for (const auto& [node, vertex] : node_vertex) {
     const auto target = node_target.find(node);
     supply += rhs(vertex) = node_sum[node] - (target != node_target.end() ? target->second : 4);
-    add_arc(vertex, sink, unbounded, node_price);
-    add_arc(sink, vertex, unbounded, node_price);
+    const auto own = node_prices.find(node);
+    const double price = own != node_prices.end() ? own->second : node_price;
+    add_arc(vertex, sink, unbounded, price);
+    add_arc(sink, vertex, unbounded, price);
   }
   rhs(sink) = -supply;
   std::vector<glp_arc*> arc_of(sectors.size(), nullptr);
@@ -314,7 +319,17 @@ int read_corners_together(const Surface& s, const Layout& layout, const QuadOpti
     const auto singular = singular_valence.find(v);
     target[v] = layout.on_loop[v] ? sum : singular != singular_valence.end() ? singular->second : 4;
   }
-  const std::vector<int> chosen = choose_corners(sectors, n, target, options.corner_node_price);
+  // Nodes near where an earlier cage of this layout had irregular vertices away from
+  // singularities (Layout::costly_nodes).
+  std::map<int, double> prices;
+  for (const auto& [v, sum] : node_sum)
+    for (const auto& [point, radius] : layout.costly_nodes)
+      if ((s.point[v] - point).norm() <= radius) {
+        prices[v] = options.off_node_price;
+        break;
+      }
+  const std::vector<int> chosen =
+      choose_corners(sectors, n, target, options.corner_node_price, prices);
   int reread = 0;
   for (size_t i = 0; i < sectors.size(); ++i)
     if (chosen[i] != sectors[i].quarters) {

@@ -648,15 +648,18 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
 // is in `seen` (a layout an earlier choice already had), or once `dropped`. Reads only its
-// arguments, so attempts run on several threads at once.
+// arguments, so attempts run on several threads at once. `costly_nodes`: the layout's
+// Layout::costly_nodes.
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
                   const std::vector<quad_detail::SingularPoint>& singular,
                   const QuadOptions& options, const std::set<std::size_t>& seen, LayoutKeys* keys,
                   QuadCage* cage, QuadStats* stats, quad_detail::Messages* messages,
-                  AttemptWork* work, const quad_detail::Dropped& dropped) {
+                  AttemptWork* work, const quad_detail::Dropped& dropped,
+                  const std::vector<std::pair<Vec3, double>>& costly_nodes = {}) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface);
+  layout.costly_nodes = costly_nodes;
   // The work so far: tracing, rounds of building patches, branch-and-bound nodes × arcs
   // of quantization, quads filled (weights: QuadOptions::work_per_component).
   const double triangles = static_cast<double>(surface.mesh.n_faces());
@@ -799,6 +802,63 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   GENBREP_CHECK(stats->flipped_quads == 0 && stats->degenerate_quads == 0, Code::StageFailure,
                 "the cage has " + std::to_string(stats->flipped_quads) + " flipped and " +
                     std::to_string(stats->degenerate_quads) + " degenerate quads");
+}
+
+// QuadOptions::off_node_price: the layout of `options` traced and read again, the nodes
+// near the irregular vertices `cage` has away from singularities priced higher; the better
+// of the two cages (better_cage) is kept in *cage, *stats, *messages, and the work of both
+// is counted. A second attempt that fails leaves the first as it was.
+void read_off_nodes_again(const quad_detail::Surface& surface,
+                          const quad_detail::CageChecks& checks,
+                          const std::vector<quad_detail::SingularPoint>& singular,
+                          const QuadOptions& options, double asked,
+                          const quad_detail::Dropped& dropped, QuadCage* cage, QuadStats* stats,
+                          quad_detail::Messages* messages, AttemptWork* work) {
+  std::vector<int> left;
+  const std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
+      checks, *cage, quad_detail::CageIncidence(*cage), singular, options.density, &left);
+  std::vector<std::pair<Vec3, double>> costly;
+  for (size_t e = 0; e < irregular.size(); ++e)
+    if (left[e])  // reach: kSingularReach local target edges (or the vertex's own edges)
+      costly.push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
+                                                quad_detail::kSingularReach});
+  LayoutKeys keys;
+  QuadCage again;
+  QuadStats again_stats;
+  quad_detail::Messages again_messages;
+  AttemptWork again_work;
+  std::string failure;
+  try {
+    extract_once(surface, checks, singular, options, {}, &keys, &again, &again_stats,
+                 &again_messages, &again_work, dropped, costly);
+  } catch (const Error& e) {
+    if (e.code() != Code::StageFailure) throw;
+    failure = e.what();
+  }
+  work->total += again_work.total;
+  dropped.check();
+  const int c = surface.component, before = stats->irregular_off_singularities;
+  const std::string head = "component " + std::to_string(c) + ": the layout read again with " +
+                           "the nodes near its " + std::to_string(before) +
+                           " irregular vertices away from singularities priced higher";
+  if (!failure.empty()) {
+    messages->notes.push_back(head + " failed (" + failure + "); the first reading kept");
+    return;
+  }
+  again_stats.irregular_off_singularities =
+      quad_detail::irregular_off_singularities(checks, again, singular, options.density);
+  again_stats.size_field_quads = asked;
+  const int after = again_stats.irregular_off_singularities;
+  if (!quad_detail::better_cage(again_stats, *stats)) {
+    messages->notes.push_back(head + ": " + std::to_string(after) +
+                              " away from singularities, not better; the first reading kept");
+    return;
+  }
+  again_messages.notes.push_back(head + ": " + std::to_string(before) + " → " +
+                                 std::to_string(after) + " away from singularities");
+  *cage = std::move(again);
+  *stats = again_stats;
+  *messages = std::move(again_messages);
 }
 
 // How often the component's triangles are split for tracing (QuadOptions::
@@ -1090,11 +1150,15 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
                      const quad_detail::Dropped& dropped) {
     try {
-      extract_once(surface, checks, singular, variants[k].options, seen, &a->keys, &a->cage, &a->stats,
-                   &a->messages, &a->work, dropped);
-      a->stats.irregular_off_singularities = quad_detail::irregular_off_singularities(
-          checks, a->cage, singular, variants[k].options.density);
+      const QuadOptions& o = variants[k].options;
+      extract_once(surface, checks, singular, o, seen, &a->keys, &a->cage, &a->stats, &a->messages,
+                   &a->work, dropped);
+      a->stats.irregular_off_singularities =
+          quad_detail::irregular_off_singularities(checks, a->cage, singular, o.density);
       a->stats.size_field_quads = asked;
+      if (o.off_node_price > 0 && a->stats.irregular_off_singularities > 0)
+        read_off_nodes_again(surface, checks, singular, o, asked, dropped, &a->cage, &a->stats,
+                             &a->messages, &a->work);
     } catch (...) {
       a->error = std::current_exception();
       a->dropped = dropped.stopped();

@@ -1498,6 +1498,12 @@ TEST(Quad, CornersChosenTogetherPairUpAtTheNodeTheyShare) {
   sectors.erase(sectors.begin() + 5, sectors.begin() + 10);
   const std::vector<int> alone = quad_detail::choose_corners(sectors, 1, target, 1.0);
   EXPECT_EQ(alone, (std::vector<int>{1, 1, 1, 1, 2, 1}));
+  // Unless 100 left one short costs more there (its own price: QuadOptions::off_node_price
+  // near an irregular vertex an earlier cage left away from singularities): then the
+  // straight 180° at 104 is re-read, and 104 is one short instead.
+  EXPECT_EQ(quad_detail::choose_corners(sectors, 1, target, 1.0, {{100, 4.0}}),
+            (std::vector<int>{2, 1, 1, 1, 1, 1}));
+  EXPECT_EQ(quad_detail::choose_corners(sectors, 1, target, 1.0, {{104, 4.0}}), alone);
   // Unless re-reading it would make a bad rectangle (its side cost): then the straight 180°.
   sectors[0].side_cost = 2.0;
   EXPECT_EQ(quad_detail::choose_corners(sectors, 1, target, 1.0),
@@ -1595,6 +1601,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
         [&](QuadOptions& o) {
           o.place_irregulars = runs[k].place;
           o.draw_pairs_together = runs[k].draw;
+          o.off_node_price = 0;  // each option's own effect, not read again after it
           if (!runs[k].arrivals) o.arrival_snap = 0, o.arrival_chord = false;
         },
         runs[k].label);
@@ -2197,6 +2204,35 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
   EXPECT_EQ(both.cages[0].quads, field_direction.cages[0].quads);
   EXPECT_EQ(both.stats[0].collapsed_quads, 0);
   EXPECT_TRUE(says(both.notes, "uses the layout with arrivals recording the field's direction"));
+}
+
+// Irregular vertices a cage leaves away from singularities sit where the corner reading
+// settled for a node off its quarter turns: the layout is read again with the nodes near
+// them priced higher (QuadOptions::off_node_price), and the better cage is kept. On the
+// 3 × 3 net at h = 0.1 the second reading leaves fewer of them, and the notes say so;
+// the first reading alone (off_node_price 0) leaves some and reads nothing again.
+TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  QuadOptions once;
+  once.off_node_price = 0;
+  const QuadResult first = extract_cages(r.mesh, r.partition, field, once, Context());
+  const QuadResult again = extract_cages(r.mesh, r.partition, field, QuadOptions(), Context());
+  for (const QuadResult* result : {&first, &again}) {
+    ASSERT_EQ(result->cages.size(), 1u);
+    EXPECT_EQ(check_cage(result->cages[0], r), 0);
+    expect_targets("net 3x3", result->stats[0]);
+  }
+  std::printf("[quad] net 3x3, h 0.1: %d irregular vertices off singularities, read again %d\n",
+              first.stats[0].irregular_off_singularities,
+              again.stats[0].irregular_off_singularities);
+  ASSERT_GT(first.stats[0].irregular_off_singularities, 0);
+  EXPECT_FALSE(says(first.notes, "read again"));
+  EXPECT_TRUE(says(again.notes, "away from singularities priced higher: " +
+                                    std::to_string(first.stats[0].irregular_off_singularities) +
+                                    " → "));
+  EXPECT_LT(again.stats[0].irregular_off_singularities, first.stats[0].irregular_off_singularities);
+  EXPECT_TRUE(quad_detail::better_cage(again.stats[0], first.stats[0]));
 }
 
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field

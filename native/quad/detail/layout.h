@@ -127,6 +127,10 @@ struct Layout {
   // Cusp sectors (by outgoing halfedge) read as quarter turns after all, because the
   // layout did not balance with them (straighten_cusps).
   std::set<int> no_cusp;
+  // Where a node whose sectors do not add up to its quarter turns costs
+  // QuadOptions::off_node_price instead of corner_node_price: (point, radius), the
+  // irregular vertices an earlier cage of this layout left away from singularities.
+  std::vector<std::pair<Vec3, double>> costly_nodes;
   std::vector<int> attractors;       // traced singular vertices (separatrices end on them)
   // Per attractor: its separatrix directions (a walk heads for it only along a free one).
   std::vector<std::vector<Vec3>> attractor_directions;
@@ -291,9 +295,11 @@ struct SectorChoice {
 // whose free sectors can make it four-cornered is made so, with the fewest quarter turns
 // moved off the angles and the fewest nodes whose sectors do not add up to their
 // `node_target` (vertex → quarter turns; 4 where absent), each such unit priced
-// `node_price` quarter turns of angle. Returns the chosen quarters, in the order given.
+// `node_price` quarter turns of angle, or at a node of `node_prices` its own price.
+// Returns the chosen quarters, in the order given.
 std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int patches,
-                                const std::map<int, int>& node_target, double node_price);
+                                const std::map<int, int>& node_target, double node_price,
+                                const std::map<int, double>& node_prices = {});
 
 // Splits curves into arcs and faces into patches; fixes patches that are not four-cornered
 // disks with extra traces. Throws Error{StageFailure} if some patch stays invalid.
