@@ -1585,7 +1585,8 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
 // or further off records its chord, so fewer spokes are traced beside it), leaves fewer
 // still (measured: 5, skewed quads 95 → 13; with arrival_snap alone 3, and 11 / 3 / 3 for
 // the three runs with it, the layout's extra spokes gone and with them most of what
-// placing and drawing mend). One scene for the four runs.
+// placing and drawing mend). None of the four reads its layout again near what is left
+// (off_node_price 0), so each option shows alone. One scene for the four runs.
 TEST(Quad, IrregularVerticesArePlacedOnANet) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1601,7 +1602,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
         [&](QuadOptions& o) {
           o.place_irregulars = runs[k].place;
           o.draw_pairs_together = runs[k].draw;
-          o.off_node_price = 0;  // each option's own effect, not read again after it
+          o.off_node_price = 0;
           if (!runs[k].arrivals) o.arrival_snap = 0, o.arrival_chord = false;
         },
         runs[k].label);
