@@ -270,9 +270,15 @@ struct QuadOptions {
   int max_refine_levels = 2;
   // Interior cage vertices wanted per quarter turn of singularity index (Σ|index| over the
   // component's traced singularities); where the field's sizes give fewer, the density is
-  // raised for that component (reported). A valence-5 vertex is one quarter turn: 50 keeps
-  // irregular vertices, with those the layout adds, under the 5% of issue 5. 0: never raise.
-  double vertices_per_singular_quarter = 50.0;
+  // raised for that component (reported). A valence-5 vertex is one quarter turn: 35 keeps
+  // irregular vertices, with those the layout adds, under the 5% of issue 5 (nets 96.6–
+  // 97.5% valence 4, lattice 97.7%). Raising more is worse: tracing is refined at most
+  // max_refine_levels times, so a denser cage has fewer mesh edges per cage edge to trace
+  // in, and more slivers and corner mismatches. 25 nets (irregular vertices off
+  // singularities / oversized / skewed): 50: 105 / 1363 / 1288; 40: 75 / 819 / 865;
+  // 35: 61 / 596 / 685; 30: 70 / 718 / 857. On net7 at h 0.14, 80 and 120 gave 59 and 71 off
+  // (30 at 50). 0: never raise.
+  double vertices_per_singular_quarter = 35.0;
 };
 
 // Quality of one cage, measured on the cage itself (what report.json shows).

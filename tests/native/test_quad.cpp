@@ -1586,7 +1586,9 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
 // still (measured: 5, skewed quads 95 → 13; with arrival_snap alone 3, and 11 / 3 / 3 for
 // the three runs with it, the layout's extra spokes gone and with them most of what
 // placing and drawing mend). None of the four reads its layout again near what is left
-// (off_node_price 0), so each option shows alone. One scene for the four runs.
+// (off_node_price 0), so each option shows alone, and all four raise the density as it was
+// then (vertices_per_singular_quarter 50; at today's 35, drawing pairs together left 7 off,
+// as many as placing alone). One scene for the four runs.
 TEST(Quad, IrregularVerticesArePlacedOnANet) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1603,6 +1605,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
           o.place_irregulars = runs[k].place;
           o.draw_pairs_together = runs[k].draw;
           o.off_node_price = 0;
+          o.vertices_per_singular_quarter = 50;
           if (!runs[k].arrivals) o.arrival_snap = 0, o.arrival_chord = false;
         },
         runs[k].label);
@@ -2170,10 +2173,14 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsWorkIsSpent) {
 // whose arrivals record the other direction (min_choices_after_meeting, arrival_chord),
 // and keeps the better. On the 3 × 3 net at h = 0.1 the requested layout alone leaves a
 // quad collapsed; the layout recording the field's direction leaves none, and is kept.
+// The density is raised as it was when this was measured (vertices_per_singular_quarter
+// 50); at today's 35 the requested layout is the better one there (0 off, 1 collapsed,
+// against 8 and 35), which the comparison would keep as well.
 TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   QuadOptions options;
+  options.vertices_per_singular_quarter = 50;
   options.work_after_meeting = 0;  // as on a component of millions of triangles
   auto alone = [&](bool chord) {
     QuadOptions o = options;
@@ -2211,14 +2218,18 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
 // settled for a node off its quarter turns: the layout is read again with the nodes near
 // them priced higher (QuadOptions::off_node_price), and the better cage is kept. On the
 // 3 × 3 net at h = 0.1 the second reading leaves fewer of them, and the notes say so;
-// the first reading alone (off_node_price 0) leaves some and reads nothing again.
+// the first reading alone (off_node_price 0) leaves some and reads nothing again. Both at
+// the density raise of when this was measured (vertices_per_singular_quarter 50): at
+// today's 35 the first reading there leaves none, and nothing is read again.
 TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
-  QuadOptions once;
+  QuadOptions options;
+  options.vertices_per_singular_quarter = 50;
+  QuadOptions once = options;
   once.off_node_price = 0;
   const QuadResult first = extract_cages(r.mesh, r.partition, field, once, Context());
-  const QuadResult again = extract_cages(r.mesh, r.partition, field, QuadOptions(), Context());
+  const QuadResult again = extract_cages(r.mesh, r.partition, field, options, Context());
   for (const QuadResult* result : {&first, &again}) {
     ASSERT_EQ(result->cages.size(), 1u);
     EXPECT_EQ(check_cage(result->cages[0], r), 0);
@@ -2234,6 +2245,35 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
                                     " → "));
   EXPECT_LT(again.stats[0].irregular_off_singularities, first.stats[0].irregular_off_singularities);
   EXPECT_TRUE(quad_detail::better_cage(again.stats[0], first.stats[0]));
+}
+
+// The density is raised where singularities are dense only as far as the valence targets
+// need (QuadOptions::vertices_per_singular_quarter 35): raised further, a cage edge spans
+// fewer of the tracing's mesh edges (refined at most max_refine_levels times) and the
+// layout leaves more irregular vertices away from singularities. The 3 × 3 net at h = 0.1
+// with the earlier 50: 4 off singularities after reading its layout again; with 35 none
+// (measured), fewer quads, both within the targets.
+TEST(Quad, TheDensityIsRaisedOnlyAsFarAsTheValenceTargetsNeed) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  QuadOptions denser;
+  denser.vertices_per_singular_quarter = 50;
+  const QuadResult raised = extract_cages(r.mesh, r.partition, field, QuadOptions(), Context());
+  const QuadResult more = extract_cages(r.mesh, r.partition, field, denser, Context());
+  for (const QuadResult* result : {&raised, &more}) {
+    ASSERT_EQ(result->cages.size(), 1u);
+    EXPECT_EQ(check_cage(result->cages[0], r), 0);
+    expect_targets("net 3x3", result->stats[0]);
+  }
+  std::printf("[quad] net 3x3, h 0.1: raised for 35 per quarter turn %d quads, %d off "
+              "singularities; for 50 %d quads, %d off\n",
+              raised.stats[0].quads, raised.stats[0].irregular_off_singularities,
+              more.stats[0].quads, more.stats[0].irregular_off_singularities);
+  EXPECT_TRUE(says(raised.notes, "at most 1 in 35 cage vertices"));
+  EXPECT_TRUE(says(more.notes, "at most 1 in 50 cage vertices"));
+  EXPECT_LT(raised.stats[0].quads, more.stats[0].quads);
+  EXPECT_LT(raised.stats[0].irregular_off_singularities,
+            more.stats[0].irregular_off_singularities);
 }
 
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
@@ -2275,7 +2315,8 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
 // round gives a valid field-aligned cage, said in the notes. (Before the refinement round
 // singular vertices, the 5 x 5 net at h = 0.12 showed it; layouts move with such changes:
 // with arrivals recording their chord, QuadOptions::arrival_chord, this layout has no
-// tangle, so it is traced as it was.)
+// tangle, so it is traced as it was, at the density raise of then:
+// vertices_per_singular_quarter 50, since at today's 35 it fills without a tangle too.)
 TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 6)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -2285,6 +2326,7 @@ TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
     options.work_per_component = 0;  // the requested layout only, then the fallback
     options.max_tangle_rounds = tangle_rounds;
     options.arrival_chord = false;
+    options.vertices_per_singular_quarter = 50;
     return extract_cages(r.mesh, r.partition, field, options, Context());
   };
   const QuadResult without = requested(0);
