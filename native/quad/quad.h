@@ -153,6 +153,13 @@ struct QuadOptions {
   // 0: never.
   double off_node_price = 4.0;
   double off_node_radius = 1.0;
+  // The second reading is a whole attempt more: it is made only where the first leaves at
+  // least this share of the cage's irregular vertices away from singularities. 25 nets at
+  // 35 vertices per quarter turn (off singularities / oversized / quad s): never read
+  // again 93 / 792 / 302; always 61 / 596 / 470; from 2% on (the genus-49 net's 3 to 5%,
+  // the 50k-triangle region's 1%, which then stays under 10 s) the figures in
+  // docs/quad_method.md. 0: wherever there are any.
+  double off_node_share = 0.02;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make

@@ -2218,7 +2218,8 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
 // settled for a node off its quarter turns: the layout is read again with the nodes near
 // them priced higher (QuadOptions::off_node_price), and the better cage is kept. On the
 // 3 × 3 net at h = 0.1 the second reading leaves fewer of them, and the notes say so;
-// the first reading alone (off_node_price 0) leaves some and reads nothing again. Both at
+// the first reading alone (off_node_price 0) leaves some and reads nothing again, and so
+// does a run that reads again only above a larger share of them (off_node_share). All at
 // the density raise of when this was measured (vertices_per_singular_quarter 50): at
 // today's 35 the first reading there leaves none, and nothing is read again.
 TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
@@ -2245,6 +2246,18 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
                                     " → "));
   EXPECT_LT(again.stats[0].irregular_off_singularities, first.stats[0].irregular_off_singularities);
   EXPECT_TRUE(quad_detail::better_cage(again.stats[0], first.stats[0]));
+  // Only where the first reading leaves at least off_node_share of the irregular vertices
+  // away from singularities (here above the default): asked for all of them, nothing is
+  // read again.
+  const double share = static_cast<double>(first.stats[0].irregular_off_singularities) /
+                       first.stats[0].irregular_vertices;
+  EXPECT_GE(share, options.off_node_share);
+  QuadOptions sparing = options;
+  sparing.off_node_share = 1;
+  const QuadResult spared = extract_cages(r.mesh, r.partition, field, sparing, Context());
+  ASSERT_EQ(spared.cages.size(), 1u);
+  EXPECT_FALSE(says(spared.notes, "read again"));
+  EXPECT_EQ(spared.cages[0].quads, first.cages[0].quads);
 }
 
 // The density is raised where singularities are dense only as far as the valence targets
