@@ -1157,8 +1157,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
           quad_detail::irregular_off_singularities(checks, a->cage, singular, o.density);
       a->stats.size_field_quads = asked;
       const int off = a->stats.irregular_off_singularities;
-      if (o.off_node_price > 0 && off > 0 &&
-          off >= o.off_node_share * a->stats.irregular_vertices)
+      if (o.off_node_price > 0 && off > 0 && off >= o.off_node_share * a->stats.irregular_vertices)
         read_off_nodes_again(surface, checks, singular, o, asked, dropped, &a->cage, &a->stats,
                              &a->messages, &a->work);
     } catch (...) {

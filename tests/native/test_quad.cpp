@@ -2278,15 +2278,15 @@ TEST(Quad, TheDensityIsRaisedOnlyAsFarAsTheValenceTargetsNeed) {
     EXPECT_EQ(check_cage(result->cages[0], r), 0);
     expect_targets("net 3x3", result->stats[0]);
   }
-  std::printf("[quad] net 3x3, h 0.1: raised for 35 per quarter turn %d quads, %d off "
-              "singularities; for 50 %d quads, %d off\n",
-              raised.stats[0].quads, raised.stats[0].irregular_off_singularities,
-              more.stats[0].quads, more.stats[0].irregular_off_singularities);
+  std::printf(
+      "[quad] net 3x3, h 0.1: raised for 35 per quarter turn %d quads, %d off "
+      "singularities; for 50 %d quads, %d off\n",
+      raised.stats[0].quads, raised.stats[0].irregular_off_singularities, more.stats[0].quads,
+      more.stats[0].irregular_off_singularities);
   EXPECT_TRUE(says(raised.notes, "at most 1 in 35 cage vertices"));
   EXPECT_TRUE(says(more.notes, "at most 1 in 50 cage vertices"));
   EXPECT_LT(raised.stats[0].quads, more.stats[0].quads);
-  EXPECT_LT(raised.stats[0].irregular_off_singularities,
-            more.stats[0].irregular_off_singularities);
+  EXPECT_LT(raised.stats[0].irregular_off_singularities, more.stats[0].irregular_off_singularities);
 }
 
 // Any genus: a net of 3 × 3 cells held by two keep-in bars (genus 9, 8 loops, 96 field
