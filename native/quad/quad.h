@@ -282,7 +282,8 @@ struct QuadOptions {
   // 97.5% valence 4, lattice 97.7%). Raising more is worse: tracing is refined at most
   // max_refine_levels times, so a denser cage has fewer mesh edges per cage edge to trace
   // in, and more slivers and corner mismatches. 25 nets (irregular vertices off
-  // singularities / oversized / skewed): 50: 105 / 1363 / 1288; 40: 75 / 819 / 865;
+  // singularities / oversized / skewed; every layout that leaves any read again, as
+  // before off_node_share): 50: 105 / 1363 / 1288; 40: 75 / 819 / 865;
   // 35: 61 / 596 / 685; 30: 70 / 718 / 857. On net7 at h 0.14, 80 and 120 gave 59 and 71 off
   // (30 at 50). 0: never raise.
   double vertices_per_singular_quarter = 35.0;
