@@ -156,7 +156,7 @@ struct QuadOptions {
   // The second reading is a whole attempt more: it is made only where the first leaves at
   // least this share of the cage's irregular vertices away from singularities. 25 nets at
   // 35 vertices per quarter turn (off singularities / oversized / quad s): never read
-  // again 93 / 792 / 302; always 61 / 596 / 470; from 2% on (the genus-49 net's 3 to 5%,
+  // again 93 / 792 / 302; always 61 / 596 / 470; from 2% on (the genus-49 net's 2.8 to 5.7%,
   // the 50k-triangle region's 1%, which then stays under 10 s) the figures in
   // docs/quad_method.md. 0: wherever there are any.
   double off_node_share = 0.02;
