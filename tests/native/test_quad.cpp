@@ -1075,6 +1075,39 @@ QuadCage edge_rotated_flat_cage() {
   return rotated;
 }
 
+// A diagonal whose collapse would leave two quads round the merged vertex sharing three
+// corners is not collapsed: q = (a, b, c, d) with r = (a, x, y, p) and s = (c, y, x, t),
+// x an edge neighbour of a and y of c, so the link test (a shared edge neighbour) does not
+// see it, but after a and c merge, a–y is r's diagonal and s's edge (the pinch that failed
+// genus 64's requested layout at h 0.1). b and d have four quads each (filler quads), so
+// only this stops it; with s = (c, y, z, t) instead the same diagonal collapses.
+TEST(Quad, ADiagonalWhoseCollapseWouldPinchTwoQuadsIsNotCollapsed) {
+  const FlatChecks square(31, 0.2);  // the square [0, 6]²
+  const quad_detail::CageChecks& checks = square.checks;
+  auto build = [](bool pinching) {
+    enum { a, b, c, d, x, y, p, t, z, first_filler };
+    const int vertices = first_filler + 2 * 3 * 3;
+    QuadCage cage;
+    cage.vertices.resize(vertices, 3);
+    for (int v = 0; v < vertices; ++v) cage.vertices.row(v) << 1 + 0.2 * (v % 20), 1 + 0.2 * (v / 20), 0;
+    std::vector<std::array<int, 4>> quads = {{a, b, c, d}, {a, x, y, p}};
+    quads.push_back(pinching ? std::array<int, 4>{c, y, x, t} : std::array<int, 4>{c, y, z, t});
+    int next = first_filler;
+    for (int corner : {b, d})
+      for (int k = 0; k < 3; ++k, next += 3) quads.push_back({corner, next, next + 1, next + 2});
+    cage.quads.resize(static_cast<Eigen::Index>(quads.size()), 4);
+    for (size_t i = 0; i < quads.size(); ++i)
+      for (int k = 0; k < 4; ++k) cage.quads(static_cast<Eigen::Index>(i), k) = quads[i][k];
+    return cage;
+  };
+  QuadCage pinching = build(true);
+  EXPECT_EQ(quad_detail::collapse_diagonals(checks.locator, pinching, {0}, {0}), 0);
+  EXPECT_EQ(pinching.quads.rows(), 9);
+  QuadCage apart = build(false);
+  EXPECT_EQ(quad_detail::collapse_diagonals(checks.locator, apart, {0}, {0}), 1);
+  EXPECT_EQ(apart.quads.rows(), 8);
+}
+
 // A vertex of six quads beside two of three is split in two: a diagonal collapsed in a
 // regular flat grid leaves a 6 between two 3s (opposite each other round it); the split
 // gives back a regular grid with one quad and one vertex more than the collapse left.
