@@ -648,14 +648,18 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
 // One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
 // when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
 // is in `seen` (a layout an earlier choice already had), or once `dropped`. Reads only its
-// arguments, so attempts run on several threads at once. `costly_nodes`: the layout's
-// Layout::costly_nodes.
+// arguments, so attempts run on several threads at once. `asked`: the quads the size field
+// asks for (QuadStats::size_field_quads). `costly_nodes`: the layout's Layout::costly_nodes.
+// `unexplained` (optional) receives, per irregular vertex of the cage no singularity
+// explains, the spot a second reading prices higher (read_off_nodes_again).
 void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
                   const std::vector<quad_detail::SingularPoint>& singular,
-                  const QuadOptions& options, const std::set<std::size_t>& seen, LayoutKeys* keys,
-                  QuadCage* cage, QuadStats* stats, quad_detail::Messages* messages,
-                  AttemptWork* work, const quad_detail::Dropped& dropped,
-                  const std::vector<std::pair<Vec3, double>>& costly_nodes = {}) {
+                  const QuadOptions& options, double asked, const std::set<std::size_t>& seen,
+                  LayoutKeys* keys, QuadCage* cage, QuadStats* stats,
+                  quad_detail::Messages* messages, AttemptWork* work,
+                  const quad_detail::Dropped& dropped,
+                  const std::vector<std::pair<Vec3, double>>& costly_nodes = {},
+                  std::vector<std::pair<Vec3, double>>* unexplained = nullptr) {
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface);
@@ -802,26 +806,34 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   GENBREP_CHECK(stats->flipped_quads == 0 && stats->degenerate_quads == 0, Code::StageFailure,
                 "the cage has " + std::to_string(stats->flipped_quads) + " flipped and " +
                     std::to_string(stats->degenerate_quads) + " degenerate quads");
+  // The irregular vertices no singularity explains, each priced within off_node_radius ×
+  // its reach (in kSingularReach units: local target edges or its own edges) if read again.
+  std::vector<int> left;
+  const std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
+      checks, *cage, quad_detail::CageIncidence(*cage), singular, options.density, &left);
+  stats->irregular_off_singularities = 0;
+  for (size_t e = 0; e < irregular.size(); ++e) {
+    if (!left[e]) continue;
+    ++stats->irregular_off_singularities;
+    if (unexplained)
+      unexplained->push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
+                                                      quad_detail::kSingularReach});
+  }
+  stats->size_field_quads = asked;
 }
 
 // QuadOptions::off_node_price: the layout of `options` traced and read again, the nodes
 // near the irregular vertices `cage` has away from singularities priced higher; the better
 // of the two cages (better_cage) is kept in *cage, *stats, *messages, and the work of both
-// is counted. A second attempt that fails leaves the first as it was.
+// is counted. A second attempt that fails leaves the first as it was. `costly`: those
+// nodes, as the first attempt gave them (extract_once's `unexplained`).
 void read_off_nodes_again(const quad_detail::Surface& surface,
                           const quad_detail::CageChecks& checks,
                           const std::vector<quad_detail::SingularPoint>& singular,
                           const QuadOptions& options, double asked,
+                          const std::vector<std::pair<Vec3, double>>& costly,
                           const quad_detail::Dropped& dropped, QuadCage* cage, QuadStats* stats,
                           quad_detail::Messages* messages, AttemptWork* work) {
-  std::vector<int> left;
-  const std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
-      checks, *cage, quad_detail::CageIncidence(*cage), singular, options.density, &left);
-  std::vector<std::pair<Vec3, double>> costly;
-  for (size_t e = 0; e < irregular.size(); ++e)
-    if (left[e])  // reach: kSingularReach local target edges (or the vertex's own edges)
-      costly.push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
-                                                quad_detail::kSingularReach});
   LayoutKeys keys;
   QuadCage again;
   QuadStats again_stats;
@@ -829,7 +841,7 @@ void read_off_nodes_again(const quad_detail::Surface& surface,
   AttemptWork again_work;
   std::string failure;
   try {
-    extract_once(surface, checks, singular, options, {}, &keys, &again, &again_stats,
+    extract_once(surface, checks, singular, options, asked, {}, &keys, &again, &again_stats,
                  &again_messages, &again_work, dropped, costly);
   } catch (const Error& e) {
     if (e.code() != Code::StageFailure) throw;
@@ -845,9 +857,6 @@ void read_off_nodes_again(const quad_detail::Surface& surface,
     messages->notes.push_back(head + " failed (" + failure + "); the first reading kept");
     return;
   }
-  again_stats.irregular_off_singularities =
-      quad_detail::irregular_off_singularities(checks, again, singular, options.density);
-  again_stats.size_field_quads = asked;
   const int after = again_stats.irregular_off_singularities;
   if (!quad_detail::better_cage(again_stats, *stats)) {
     messages->notes.push_back(head + ": " + std::to_string(after) +
@@ -1151,15 +1160,13 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                      const quad_detail::Dropped& dropped) {
     try {
       const QuadOptions& o = variants[k].options;
-      extract_once(surface, checks, singular, o, seen, &a->keys, &a->cage, &a->stats, &a->messages,
-                   &a->work, dropped);
-      a->stats.irregular_off_singularities =
-          quad_detail::irregular_off_singularities(checks, a->cage, singular, o.density);
-      a->stats.size_field_quads = asked;
+      std::vector<std::pair<Vec3, double>> unexplained;
+      extract_once(surface, checks, singular, o, asked, seen, &a->keys, &a->cage, &a->stats,
+                   &a->messages, &a->work, dropped, {}, &unexplained);
       const int off = a->stats.irregular_off_singularities;
       if (o.off_node_price > 0 && off > 0 && off >= o.off_node_share * a->stats.irregular_vertices)
-        read_off_nodes_again(surface, checks, singular, o, asked, dropped, &a->cage, &a->stats,
-                             &a->messages, &a->work);
+        read_off_nodes_again(surface, checks, singular, o, asked, unexplained, dropped, &a->cage,
+                             &a->stats, &a->messages, &a->work);
     } catch (...) {
       a->error = std::current_exception();
       a->dropped = dropped.stopped();
