@@ -41,7 +41,50 @@ double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
   return angle;
 }
 
-void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
+// QuadOptions::kink_nodes: a vertex where an open curve's recorded direction turns a
+// quarter turn against the field from the vertex before (its walk snapped to the other
+// cross direction there, where the field turns fast under it) becomes a node, and the
+// curve's tangent into it is the direction it came along. Otherwise the turn lies inside
+// an arc, where no node reads it: the patches either side turn three and five quarter
+// turns at their nodes, and the corner reading makes up the difference at some other node,
+// an irregular vertex no singularity explains. Left as they are: nodes already there, link
+// curves, the curves' ends, and turns within kCaptureReach of a singular vertex the curve
+// starts or ends at, where the walk follows its way to the singularity (lattice: such a
+// turn one cage edge before a singularity, read as a corner, left an irregular vertex
+// unexplained and 31-34 quads oversized in every layout choice). O(curve vertices +
+// curves × singularities), every round of build_patches.
+void mark_kinks(const Surface& s, Layout& layout) {
+  auto singular = [&](int v) {
+    return std::find(layout.attractors.begin(), layout.attractors.end(), v) !=
+           layout.attractors.end();
+  };
+  for (const Curve& curve : layout.curves) {
+    const int n = static_cast<int>(curve.vertices.size());  // 0: taken off the layout
+    if (curve.closed || curve.link || n < 3) continue;
+    std::vector<int> captured;  // the curve's ends at singular vertices
+    for (int end : {curve.vertices.front(), curve.vertices.back()})
+      if (singular(end)) captured.push_back(end);
+    for (int i = 1; i + 1 < n; ++i) {
+      const int u = curve.vertices[i - 1], v = curve.vertices[i];
+      if (layout.node[v]) continue;
+      const int h = s.mesh.find_halfedge(s.mesh.vertex_handle(u), s.mesh.vertex_handle(v)).idx();
+      const int f = s.in(s.face(h)) ? s.face(h) : s.face(h ^ 1);
+      if (!s.in(f)) continue;
+      // Both directions snapped on one face, so the field's own turning between the two
+      // vertices does not count.
+      const Vec3 a = s.snap(f, curve.direction[i - 1]), b = s.snap(f, curve.direction[i]);
+      if (std::abs(a.dot(b)) > 0.5) continue;
+      bool on_the_way = false;
+      for (int end : captured)
+        on_the_way |= (s.point[v] - s.point[end]).norm() < kCaptureReach * s.vertex_size[end];
+      if (on_the_way) continue;
+      layout.node[v] = 1;
+      layout.halfedge_dir[h ^ 1] = -curve.direction[i - 1];
+    }
+  }
+}
+
+void build_arcs(const Surface& s, Layout& layout, bool kink_nodes, PatchLayout& out) {
   const int n_curves = static_cast<int>(layout.curves.size());
   std::vector<int> degree(s.mesh.n_vertices(), 0);
   for (int e = 0; e < static_cast<int>(layout.edge_curve.size()); ++e)
@@ -52,6 +95,7 @@ void build_arcs(const Surface& s, Layout& layout, PatchLayout& out) {
     }
   for (int v : s.vertices)
     if (layout.claimed[v] && degree[v] != 2) layout.node[v] = 1;
+  if (kink_nodes) mark_kinks(s, layout);
   out.arcs.clear();
   out.halfedge_arc.assign(s.mesh.n_halfedges(), -1);
   out.loop_arcs.assign(n_curves, {});
@@ -310,7 +354,7 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
                   "quad: " + who + ": the extra cuts of round " + std::to_string(round) +
                       " give back the layout of round " + std::to_string(first_seen->second) +
                       "; some patches never become four-sided disks");
-    build_arcs(s, layout, out);
+    build_arcs(s, layout, options.kink_nodes, out);
     // Flood fill the component's faces across edges no curve runs along. Only where the
     // layout changed since the last round (a curve edge, its direction or a node): the
     // patches around those vertices are filled and examined again, the others keep what

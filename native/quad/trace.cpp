@@ -450,7 +450,8 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
         const int a = layout.attractors[i];
         if (a == vertex || a == v) continue;
         const Vec3 to_a = s.point[a] - s.point[v];
-        if (to_a.norm() > 0.75 * s.vertex_size[v] || to_a.normalized().dot(d) < 0.6) continue;
+        if (to_a.norm() > kCaptureReach * s.vertex_size[v] || to_a.normalized().dot(d) < 0.6)
+          continue;
         if (!free_arrival(s, layout, i, s.point[v])) continue;
         if (to_a.normalized().dot(d) > kRouteCos) {
           route = route_to(s, layout, v, i, allowed, visited);

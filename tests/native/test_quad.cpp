@@ -1621,7 +1621,9 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
 // placing and drawing mend). None of the four reads its layout again near what is left
 // (off_node_price 0), so each option shows alone, and all four raise the density as it was
 // then (vertices_per_singular_quarter 50; at today's 35, drawing pairs together left 7 off,
-// as many as placing alone). One scene for the four runs.
+// as many as placing alone) and read no quarter turn along a curve as a node (kink_nodes
+// off: with them drawing pairs together leaves 5 off, as placing alone does). One scene for
+// the four runs.
 TEST(Quad, IrregularVerticesArePlacedOnANet) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1639,6 +1641,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
           o.draw_pairs_together = runs[k].draw;
           o.off_node_price = 0;
           o.vertices_per_singular_quarter = 50;
+          o.kink_nodes = false;
           if (!runs[k].arrivals) o.arrival_snap = 0, o.arrival_chord = false;
         },
         runs[k].label);
@@ -1821,6 +1824,47 @@ TEST(Quad, SectorAnglesComeFromTheCurvesWhereTangentsCannotTell) {
   EXPECT_NEAR(quad_detail::sector_angle(s, layout, diagonal, right ^ 1, 0), 2 * kPi, 1e-9);
   EXPECT_NEAR(quad_detail::sector_angle(s, layout, down, right ^ 1, 5), 0.5 * kPi * 5 / 4, 1e-6);
   EXPECT_NEAR(quad_detail::sector_angle(s, layout, right, diagonal ^ 1, 5), 0.25 * kPi * 5 / 4, 1e-6);
+}
+
+// A curve whose walk snapped to the other cross direction (QuadOptions::kink_nodes): on a
+// flat 21 × 21 grid bounded by four curves, a curve runs up from the bottom side at x = 1
+// to y = 1 and on to the right side, its recorded direction turning from up to right at
+// the bend. Read as a node there, the bend is a corner of the patch below it on the right
+// (a quarter turn) and of the patch round it (three), which is cut from there: three
+// four-sided patches, no corner re-read. Without it the bend lies inside one arc, and the
+// patch below it has only three nodes to make four corners of.
+TEST(Quad, AQuarterTurnAlongACurveIsAKinkNode) {
+  constexpr int n = 21, bend = 10 * n + 10;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  quad_detail::Curve curve = grid_curve(n, 0, 10, 10, 10);  // up x = 1, y 0 → 1
+  const quad_detail::Curve right = grid_curve(n, 10, 10, 10, 20);
+  curve.vertices.insert(curve.vertices.end(), right.vertices.begin() + 1, right.vertices.end());
+  curve.direction.assign(curve.vertices.size(), Vec3(1, 0, 0));
+  for (int i = 0; i < 10; ++i) curve.direction[i] = Vec3(0, 1, 0);  // right from the bend on
+  for (const bool kinks : {true, false}) {
+    SCOPED_TRACE(kinks ? "kink nodes" : "no kink nodes");
+    quad_detail::Layout layout = bounded_square_layout(s, n, curve);
+    QuadOptions options;
+    options.kink_nodes = kinks;
+    quad_detail::Messages messages;
+    const quad_detail::PatchLayout patches =
+        quad_detail::build_patches(s, layout, options, messages);
+    int arcs_ending_there = 0;
+    for (const auto& arc : patches.arcs)
+      arcs_ending_there += arc.vertices.front() == bend || arc.vertices.back() == bend;
+    if (!kinks) {
+      EXPECT_GT(patches.recornered, 0);  // (a cut from an arc's middle and 4 patches, as built)
+      continue;
+    }
+    EXPECT_TRUE(layout.node[bend]);
+    EXPECT_EQ(arcs_ending_there, 3);      // the curve's two arcs and the cut
+    EXPECT_EQ(layout.curves.size(), 6u);  // the sides, the curve and one cut
+    EXPECT_EQ(patches.recornered, 0);
+    ASSERT_EQ(patches.patches.size(), 3u);
+    for (const auto& patch : patches.patches)
+      for (const auto& side : patch.sides) EXPECT_FALSE(side.empty());
+  }
 }
 
 // Sectors read at their node together: three curves leave a vertex at 45°, 180° and 270°.
@@ -2207,13 +2251,16 @@ TEST(Quad, LayoutChoicesStopWhenTheComponentsWorkIsSpent) {
 // and keeps the better. On the 3 × 3 net at h = 0.1 the requested layout alone leaves a
 // quad collapsed; the layout recording the field's direction leaves none, and is kept.
 // The density is raised as it was when this was measured (vertices_per_singular_quarter
-// 50); at today's 35 the requested layout is the better one there (0 off, 1 collapsed,
-// against 8 and 35), which the comparison would keep as well.
+// 50) and without kink nodes (QuadOptions::kink_nodes; with them the layout recording the
+// field's direction is not the better one there); at today's 35 the requested layout is
+// the better one there (0 off, 1 collapsed, against 8 and 35), which the comparison would
+// keep as well.
 TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   QuadOptions options;
   options.vertices_per_singular_quarter = 50;
+  options.kink_nodes = false;
   options.work_after_meeting = 0;  // as on a component of millions of triangles
   auto alone = [&](bool chord) {
     QuadOptions o = options;
@@ -2253,13 +2300,15 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
 // 3 × 3 net at h = 0.1 the second reading leaves fewer of them, and the notes say so;
 // the first reading alone (off_node_price 0) leaves some and reads nothing again, and so
 // does a run that reads again only above a larger share of them (off_node_share). All at
-// the density raise of when this was measured (vertices_per_singular_quarter 50): at
-// today's 35 the first reading there leaves none, and nothing is read again.
+// the density raise of when this was measured (vertices_per_singular_quarter 50) and
+// without kink nodes (QuadOptions::kink_nodes): at today's 35, or with kink nodes, the
+// first reading there leaves none, and nothing is read again.
 TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   QuadOptions options;
   options.vertices_per_singular_quarter = 50;
+  options.kink_nodes = false;
   QuadOptions once = options;
   once.off_node_price = 0;
   const QuadResult first = extract_cages(r.mesh, r.partition, field, once, Context());
@@ -2298,13 +2347,16 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
 // fewer of the tracing's mesh edges (refined at most max_refine_levels times) and the
 // layout leaves more irregular vertices away from singularities. The 3 × 3 net at h = 0.1
 // with the earlier 50: 4 off singularities after reading its layout again; with 35 none
-// (measured), fewer quads, both within the targets.
+// (measured), fewer quads, both within the targets. Both without kink nodes
+// (QuadOptions::kink_nodes), as when this was measured: with them 50 leaves none too.
 TEST(Quad, TheDensityIsRaisedOnlyAsFarAsTheValenceTargetsNeed) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
-  QuadOptions denser;
+  QuadOptions options;
+  options.kink_nodes = false;
+  QuadOptions denser = options;
   denser.vertices_per_singular_quarter = 50;
-  const QuadResult raised = extract_cages(r.mesh, r.partition, field, QuadOptions(), Context());
+  const QuadResult raised = extract_cages(r.mesh, r.partition, field, options, Context());
   const QuadResult more = extract_cages(r.mesh, r.partition, field, denser, Context());
   for (const QuadResult* result : {&raised, &more}) {
     ASSERT_EQ(result->cages.size(), 1u);
@@ -2362,7 +2414,8 @@ TEST(Quad, ANetOfGenusNineGetsAFieldAlignedCage) {
 // singular vertices, the 5 x 5 net at h = 0.12 showed it; layouts move with such changes:
 // with arrivals recording their chord, QuadOptions::arrival_chord, this layout has no
 // tangle, so it is traced as it was, at the density raise of then:
-// vertices_per_singular_quarter 50, since at today's 35 it fills without a tangle too.)
+// vertices_per_singular_quarter 50, since at today's 35 it fills without a tangle too,
+// and without kink nodes, QuadOptions::kink_nodes, with which it has no tangle either.)
 TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 6)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -2373,6 +2426,7 @@ TEST(Quad, ATangleTheUntanglingLeavesIsMergedAndFilledAgain) {
     options.max_tangle_rounds = tangle_rounds;
     options.arrival_chord = false;
     options.vertices_per_singular_quarter = 50;
+    options.kink_nodes = false;
     return extract_cages(r.mesh, r.partition, field, options, Context());
   };
   const QuadResult without = requested(0);

@@ -140,6 +140,12 @@ struct Layout {
   int patch_rounds = 0;  // build_patches rounds run on this layout (the search's work budget)
 };
 
+// A walk heads straight for a singular vertex ahead once within this × the local target
+// edge length (at density 1) of it (trace_direction): its last steps there follow the way
+// to the singularity, not the field, so a turn against the field among them is not read
+// as a corner (QuadOptions::kink_nodes).
+constexpr double kCaptureReach = 0.75;
+
 // Starts a layout from the component's loops (nodes at boundary singularities).
 Layout start_layout(const Surface& s);
 // Marks curve c on the edge/halfedge tables (after its vertices and directions are set).
