@@ -682,7 +682,8 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   // The rest is deterministic in the traced curves and the options it reads: a choice
   // that traced the same curves as an earlier one with the same options gives its result.
   std::size_t traced = (options.fit_corners ? (options.global_corners ? 3u : 2u) : 1u) * 1000003u +
-                       static_cast<std::size_t>(options.max_balance_rounds);
+                       static_cast<std::size_t>(options.max_balance_rounds) * 2u +
+                       (options.kink_nodes ? 1u : 0u);
   for (const auto& curve : layout.curves)
     for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
   keys->traced = traced;
@@ -1279,6 +1280,32 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       if (comfortably_meets_targets(judged) && !judged.collapsed_quads && best == int(k))
         stop = true;
       if (first_meeting < 0 && meets) first_meeting = static_cast<int>(k);
+    }
+  }
+  // Last field-aligned resort before the fallback cage: the requested layout without kink
+  // nodes (QuadOptions::kink_nodes). Their corners can leave a layout that no integer counts
+  // balance (lattice's requested layout at h 0.125: 266 patches, 14 merged, none balance),
+  // and where every choice the component's work allowed failed so, the layout as it is
+  // read without them still gives a field-aligned cage. One more attempt, on this thread.
+  if (best < 0 && variants[0].options.kink_nodes) {
+    Variant plain = variants[0];
+    plain.what = "no quarter turn along a curve read as a node";
+    plain.options.kink_nodes = false;
+    variants.push_back(plain);
+    Attempt a;
+    attempt(variants.size() - 1, {}, &a, quad_detail::Dropped());
+    if (a.error) {
+      try {
+        std::rethrow_exception(a.error);
+      } catch (const Error& e) {
+        if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
+      }
+    } else {
+      best = static_cast<int>(variants.size()) - 1;
+      best_cage = std::move(a.cage);
+      best_stats = a.stats;
+      best_meets = meets_targets(a.judged());
+      best_messages = std::move(a.messages);
     }
   }
   if (best >= 0) {

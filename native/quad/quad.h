@@ -119,6 +119,9 @@ struct QuadOptions {
   // skewed quads 627 / 708 → 515 / 627; genus 64 30 → 5, 472 / 295 → 397 / 281. Turns
   // within kCaptureReach of a singular end are not read (with them: 36 and 2, but lattice
   // 1 unexplained and 31-34 oversized quads in every layout choice, where it has 0 and 1).
+  // Their corners can leave a layout no integer counts balance (lattice's requested one):
+  // where every choice the component's work allows fails, the requested layout is read
+  // once more without them before the fallback cage.
   bool kink_nodes = true;
   // Irregular vertices the layout leaves beside a singularity that does not explain them
   // (a −1 singularity drawn as a 6 and a 3, a 3–5 pair beside a 5) are moved onto it by

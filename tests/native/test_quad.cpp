@@ -2588,6 +2588,38 @@ TEST(Quad, QuantizationStopsAtTheGapNotTheClock) {
   EXPECT_LT(solve(0.5, 10).quantize_nodes, optimal.quantize_nodes);
 }
 
+// Where every layout choice the component's work allows fails, the requested layout is
+// tried once more without kink nodes (QuadOptions::kink_nodes) before the fallback cage:
+// lattice at h = 0.125 with the requested layout alone (work_per_component 0), whose
+// kink nodes leave patches no integer counts balance, gets a field-aligned cage within
+// the targets from the layout read without them, and the notes say which; the same as
+// asking for no kink nodes at all.
+TEST(Quad, ALayoutThatKinkNodesLeaveUnbalancedIsReadWithoutThemBeforeTheFallback) {
+  const double h = 0.125;
+  const FixtureFiles f = load_fixture("lattice");
+  Options options;
+  options.incidence.mode = IncidenceOptions::Mode::Grid;
+  options.incidence.grid_h = h;
+  options.incidence.grid_origin = Vec3(0.37, 0.29, 0.41) * h;
+  options.until = "quad";
+  options.quad.work_per_component = 0;  // the requested layout only
+  const QuadResult kinks =
+      genbrep::convert({{"design", f.design}, f.solids}, options, Context()).quads;
+  options.quad.kink_nodes = false;
+  const QuadResult plain =
+      genbrep::convert({{"design", f.design}, f.solids}, options, Context()).quads;
+  ASSERT_EQ(kinks.cages.size(), 1u);
+  ASSERT_EQ(plain.cages.size(), 1u);
+  for (const auto& d : kinks.notes)
+    std::printf("[quad] lattice, requested layout only: %s\n", d.c_str());
+  EXPECT_FALSE(kinks.stats[0].fallback);
+  EXPECT_TRUE(says(kinks.notes, "the requested one failed"));
+  EXPECT_TRUE(says(kinks.notes, "no quarter turn along a curve read as a node"));
+  expect_targets("lattice", kinks.stats[0]);
+  EXPECT_EQ(kinks.cages[0].quads, plain.cages[0].quads);
+  EXPECT_EQ(kinks.stats[0].irregular_off_singularities, plain.stats[0].irregular_off_singularities);
+}
+
 // Layout choices run two at a time give the cage they give one at a time: on arches
 // (the second choice beats the first) and components at h = 0.11 (one component's first
 // choice fails, a later one is kept), the same cage, stats and diagnostics, and the kept
