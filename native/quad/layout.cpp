@@ -47,13 +47,16 @@ double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
 // curve's tangent into it is the direction it came along. Otherwise the turn lies inside
 // an arc, where no node reads it: the patches either side turn three and five quarter
 // turns at their nodes, and the corner reading makes up the difference at some other node,
-// an irregular vertex no singularity explains. Left as they are: nodes already there, link
-// curves, the curves' ends, and turns within kCaptureReach of a singular vertex the curve
+// an irregular vertex no singularity explains. Left as they are: vertices where other
+// curves meet the curve (`degree` ≠ 2, curve edges at each vertex), link curves, the
+// curves' ends, and turns within kCaptureReach of a singular vertex the curve
 // starts or ends at, where the walk follows its way to the singularity (lattice: such a
 // turn one cage edge before a singularity, read as a corner, left an irregular vertex
 // unexplained and 31-34 quads oversized in every layout choice). O(curve vertices +
-// curves × singularities), every round of build_patches.
-void mark_kinks(const Surface& s, Layout& layout) {
+// curves × singularities), every round of build_patches: again on the same curves (their
+// tangents are set again where a curve's tail was registered anew after a stretch of it
+// was taken off).
+void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree) {
   auto singular = [&](int v) {
     return std::find(layout.attractors.begin(), layout.attractors.end(), v) !=
            layout.attractors.end();
@@ -66,7 +69,7 @@ void mark_kinks(const Surface& s, Layout& layout) {
       if (singular(end)) captured.push_back(end);
     for (int i = 1; i + 1 < n; ++i) {
       const int u = curve.vertices[i - 1], v = curve.vertices[i];
-      if (layout.node[v]) continue;
+      if (degree[v] != 2) continue;
       const int h = s.mesh.find_halfedge(s.mesh.vertex_handle(u), s.mesh.vertex_handle(v)).idx();
       const int f = s.in(s.face(h)) ? s.face(h) : s.face(h ^ 1);
       if (!s.in(f)) continue;
@@ -95,7 +98,7 @@ void build_arcs(const Surface& s, Layout& layout, bool kink_nodes, PatchLayout& 
     }
   for (int v : s.vertices)
     if (layout.claimed[v] && degree[v] != 2) layout.node[v] = 1;
-  if (kink_nodes) mark_kinks(s, layout);
+  if (kink_nodes) mark_kinks(s, layout, degree);
   out.arcs.clear();
   out.halfedge_arc.assign(s.mesh.n_halfedges(), -1);
   out.loop_arcs.assign(n_curves, {});

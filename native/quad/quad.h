@@ -115,8 +115,8 @@ struct QuadOptions {
   // that the corner reading makes up at another node with an irregular vertex. On the
   // genus-49 net at h 0.14, 212 of its 1580 patches turned three quarter turns at their
   // nodes with no singularity inside, 64 of them with such a turn along an arc. 25 nets
-  // (genus 9-49, h 0.1-0.14): irregular vertices off singularities 64 → 45, oversized /
-  // skewed quads 627 / 708 → 515 / 627; genus 64 30 → 5, 472 / 295 → 397 / 281. Turns
+  // (genus 9-49, h 0.1-0.14): irregular vertices off singularities 64 → 48, oversized /
+  // skewed quads 627 / 708 → 523 / 671; genus 64 30 → 5, 472 / 295 → 397 / 281. Turns
   // within kCaptureReach of a singular end are not read (with them: 36 and 2, but lattice
   // 1 unexplained and 31-34 oversized quads in every layout choice, where it has 0 and 1).
   // Their corners can leave a layout no integer counts balance (lattice's requested one):
