@@ -43,19 +43,21 @@ double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
 
 // QuadOptions::kink_nodes: a vertex where an open curve's recorded direction turns a
 // quarter turn against the field from the vertex before (its walk snapped to the other
-// cross direction there, where the field turns fast under it) becomes a node, and the
-// curve's tangent into it is the direction it came along. Otherwise the turn lies inside
-// an arc, where no node reads it: the patches either side turn three and five quarter
-// turns at their nodes, and the corner reading makes up the difference at some other node,
-// an irregular vertex no singularity explains. Left as they are: vertices where other
-// curves meet the curve (`degree` ≠ 2, curve edges at each vertex), link curves, the
-// curves' ends, and turns within kCaptureReach of a singular vertex the curve
-// starts or ends at, where the walk follows its way to the singularity (lattice: such a
-// turn one cage edge before a singularity, read as a corner, left an irregular vertex
-// unexplained and 31-34 quads oversized in every layout choice). O(curve vertices +
-// curves × singularities), every round of build_patches: again on the same curves (their
-// tangents are set again where a curve's tail was registered anew after a stretch of it
-// was taken off).
+// cross direction there, where the field turns fast under it) is read with the direction
+// the curve came along as its tangent into it: a vertex of the curve alone becomes a node
+// (sectors of 90° and 270° there), one where other curves meet it (`degree` ≠ 2, curve
+// edges at each vertex) or the curve's last vertex, a node already, has its sectors read
+// with that tangent. Otherwise the turn lies inside an arc, or in the tangent of a node,
+// where no reading sees it: the patches either side turn three and five quarter turns at
+// their nodes, and the corner reading makes up the difference at some other node, an
+// irregular vertex no singularity explains. Left as they are: link curves, the curves'
+// first vertices, and turns within kCaptureReach of a singular vertex the curve starts or
+// ends at (a curve arriving at one keeps the separatrix direction it took there), where
+// the walk follows its way to the singularity (lattice: such a turn one cage edge before a
+// singularity, read as a corner, left an irregular vertex unexplained and 31-34 quads
+// oversized in every layout choice). O(curve vertices + curves × singularities), every
+// round of build_patches: again on the same curves (their tangents are set again where a
+// curve's tail was registered anew after a stretch of it was taken off).
 void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree) {
   auto singular = [&](int v) {
     return std::find(layout.attractors.begin(), layout.attractors.end(), v) !=
@@ -67,9 +69,8 @@ void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree
     std::vector<int> captured;  // the curve's ends at singular vertices
     for (int end : {curve.vertices.front(), curve.vertices.back()})
       if (singular(end)) captured.push_back(end);
-    for (int i = 1; i + 1 < n; ++i) {
+    for (int i = 1; i < n; ++i) {
       const int u = curve.vertices[i - 1], v = curve.vertices[i];
-      if (degree[v] != 2) continue;
       const int h = s.mesh.find_halfedge(s.mesh.vertex_handle(u), s.mesh.vertex_handle(v)).idx();
       const int f = s.in(s.face(h)) ? s.face(h) : s.face(h ^ 1);
       if (!s.in(f)) continue;
@@ -81,7 +82,7 @@ void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree
       for (int end : captured)
         on_the_way |= (s.point[v] - s.point[end]).norm() < kCaptureReach * s.vertex_size[end];
       if (on_the_way) continue;
-      layout.node[v] = 1;
+      if (degree[v] == 2) layout.node[v] = 1;
       layout.halfedge_dir[h ^ 1] = -curve.direction[i - 1];
     }
   }

@@ -110,18 +110,20 @@ struct QuadOptions {
   // 1445, skewed quads 6248 -> 5928.
   bool node_readings = true;
   // A vertex where a traced curve turns a quarter turn against the field (its walk snapped
-  // to the other cross direction, where the field turns fast under it) is a node that
-  // reads the turn as a corner (layout.cpp: mark_kinks), not a turn hidden inside an arc
-  // that the corner reading makes up at another node with an irregular vertex. On the
-  // genus-49 net at h 0.14, 212 of its 1580 patches turned three quarter turns at their
-  // nodes with no singularity inside, 64 of them with such a turn along an arc. 25 nets
-  // (genus 9-49, h 0.1-0.14): irregular vertices off singularities 64 → 48, oversized /
-  // skewed quads 627 / 708 → 523 / 671; genus 64 30 → 5, 472 / 295 → 397 / 281. Turns
-  // within kCaptureReach of a singular end are not read (with them: 36 and 2, but lattice
-  // 1 unexplained and 31-34 oversized quads in every layout choice, where it has 0 and 1).
-  // Their corners can leave a layout no integer counts balance (lattice's requested one):
-  // where every choice the component's work allows fails, the requested layout is read
-  // once more without them before the fallback cage.
+  // to the other cross direction, where the field turns fast under it) is read with the
+  // direction the curve came along (layout.cpp: mark_kinks): a node that reads the turn as
+  // a corner, or at a junction or the curve's last vertex, the sectors read with that
+  // tangent; not a turn hidden inside an arc or a node's tangent, which the corner reading
+  // makes up at another node with an irregular vertex. On the genus-49 net at h 0.14, 212
+  // of its 1580 patches turned three quarter turns at their nodes with no singularity
+  // inside, 64 of them with such a turn along an arc. 25 nets (genus 9-49, h 0.1-0.14):
+  // irregular vertices off singularities 64 → 36, oversized / skewed quads 627 / 708 →
+  // 461 / 548; genus 64 30 → 1, 472 / 295 → 309 / 230 (48 and 5 reading only the vertices
+  // of one curve). Turns within kCaptureReach of a singular end are not read (with them:
+  // lattice 1 unexplained and 31-34 oversized quads in every layout choice, where it has 0
+  // and 1). Their corners can leave a layout no integer counts balance (lattice's
+  // requested one): where every choice the component's work allows fails, the requested
+  // layout is read once more without them before the fallback cage.
   bool kink_nodes = true;
   // Irregular vertices the layout leaves beside a singularity that does not explain them
   // (a −1 singularity drawn as a 6 and a 3, a 3–5 pair beside a 5) are moved onto it by

@@ -1867,6 +1867,42 @@ TEST(Quad, AQuarterTurnAlongACurveIsAKinkNode) {
   }
 }
 
+// The same where the turn falls on a node (QuadOptions::kink_nodes): on the flat square, a
+// curve across it at y = 1 and a curve up from the bottom side at x = 1 that ends on it,
+// its last recorded direction snapped to the other cross direction (along the curve it
+// meets). Read with the direction it came along, the T reads 90°, 90° and 180°: three
+// four-sided patches, no cut, no corner re-read. Read with its last direction, the curve
+// seems to arrive along the other one (a sector of nothing and one of a half turn), and the
+// patches need re-reading.
+TEST(Quad, AQuarterTurnIntoANodeIsReadWithTheDirectionTheCurveCameAlong) {
+  constexpr int n = 21, tee = 10 * n + 10;
+  const FlatGrid flat(n, 0.1);
+  const quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  quad_detail::Curve up = grid_curve(n, 0, 10, 10, 10);  // up x = 1, y 0 → 1
+  up.direction.back() = Vec3(1, 0, 0);                   // snapped along the curve it meets
+  for (const bool kinks : {true, false}) {
+    SCOPED_TRACE(kinks ? "kink nodes" : "no kink nodes");
+    quad_detail::Layout layout = bounded_square_layout(s, n, grid_curve(n, 10, 0, 10, 20));
+    layout.curves.push_back(up);
+    quad_detail::register_curve(s, layout, static_cast<int>(layout.curves.size()) - 1);
+    QuadOptions options;
+    options.kink_nodes = kinks;
+    quad_detail::Messages messages;
+    const quad_detail::PatchLayout patches =
+        quad_detail::build_patches(s, layout, options, messages);
+    EXPECT_TRUE(layout.node[tee]);
+    EXPECT_EQ(layout.curves.size(), 6u);  // no cut either way
+    if (!kinks) {
+      EXPECT_GT(patches.recornered, 0);  // (4 sectors re-read, as built)
+      continue;
+    }
+    EXPECT_EQ(patches.recornered, 0);
+    ASSERT_EQ(patches.patches.size(), 3u);
+    for (const auto& patch : patches.patches)
+      for (const auto& side : patch.sides) EXPECT_FALSE(side.empty());
+  }
+}
+
 // Sectors read at their node together: three curves leave a vertex at 45°, 180° and 270°.
 // Each sector rounded alone reads 135° as 2, 90° as 1 and 135° as 2: five quarter turns,
 // a cage vertex of valence 5 where the field has no singularity. Read on one grid of
