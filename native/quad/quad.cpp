@@ -602,6 +602,17 @@ std::string same_layout(int c) {
   return "quad: component " + std::to_string(c) + ": the same layout as an earlier choice";
 }
 
+// Why a layout choice's attempt failed (its error's message); a cancellation or bad input
+// is thrown on, as is anything not a genbrep Error.
+std::string attempt_failure(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const Error& e) {
+    if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
+    return e.what();
+  }
+}
+
 // The layout's two fingerprints, set as extract_once reaches them: the traced curves (with
 // the options the rest reads) and the quantized patch layout.
 struct LayoutKeys {
@@ -1157,6 +1168,16 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       return judged;
     }
   };
+  // Choice k's attempt becomes the cage kept so far.
+  auto keep = [&](size_t k, Attempt& a, bool meets) {
+    best = static_cast<int>(k);
+    best_cage = std::move(a.cage);
+    best_stats = a.stats;
+    best_meets = meets;
+    best_squared = std::move(a.squared);
+    best_squaring_tried = a.squaring_tried;
+    best_messages = std::move(a.messages);
+  };
   auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
                      const quad_detail::Dropped& dropped) {
     try {
@@ -1235,12 +1256,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       if (repeated) {
         failure = same_layout(c);
       } else if (a.error) {
-        try {
-          std::rethrow_exception(a.error);
-        } catch (const Error& e) {
-          if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
-          failure = e.what();
-        }
+        failure = attempt_failure(a.error);
       }
       if (!failure.empty()) {
         tried_after_meeting += first_meeting >= 0 && grew;
@@ -1268,15 +1284,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       // Collapsed quads mean the layout itself was broken there: such a cage ranks below
       // every collapse-free one (better_cage), but a valid field-aligned cage still beats the
       // fallback (the genus-64 net's: 97.6% valence 4 at 13.9°, against the fallback's 85%).
-      if (best < 0 || quad_detail::better_cage(a.stats, meets, best_stats, best_meets)) {
-        best = static_cast<int>(k);
-        best_cage = std::move(a.cage);
-        best_stats = a.stats;
-        best_meets = meets;
-        best_squared = std::move(a.squared);
-        best_squaring_tried = a.squaring_tried;
-        best_messages = std::move(a.messages);
-      }
+      if (best < 0 || quad_detail::better_cage(a.stats, meets, best_stats, best_meets))
+        keep(k, a, meets);
       if (comfortably_meets_targets(judged) && !judged.collapsed_quads && best == int(k))
         stop = true;
       if (first_meeting < 0 && meets) first_meeting = static_cast<int>(k);
@@ -1294,19 +1303,10 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     variants.push_back(plain);
     Attempt a;
     attempt(variants.size() - 1, {}, &a, quad_detail::Dropped());
-    if (a.error) {
-      try {
-        std::rethrow_exception(a.error);
-      } catch (const Error& e) {
-        if (e.code() == Code::Cancelled || e.code() == Code::InvalidInput) throw;
-      }
-    } else {
-      best = static_cast<int>(variants.size()) - 1;
-      best_cage = std::move(a.cage);
-      best_stats = a.stats;
-      best_meets = meets_targets(a.judged());
-      best_messages = std::move(a.messages);
-    }
+    if (a.error)
+      attempt_failure(a.error);  // a failure here leaves the fallback cage
+    else
+      keep(variants.size() - 1, a, meets_targets(a.judged()));
   }
   if (best >= 0) {
     add_messages(best_messages, out);
