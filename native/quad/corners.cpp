@@ -323,11 +323,7 @@ int read_corners_together(const Surface& s, const Layout& layout, const QuadOpti
   // singularities (Layout::costly_nodes).
   std::map<int, double> prices;
   for (const auto& [v, sum] : node_sum)
-    for (const auto& [point, radius] : layout.costly_nodes)
-      if ((s.point[v] - point).norm() <= radius) {
-        prices[v] = options.off_node_price;
-        break;
-      }
+    if (layout.costly(s.point[v])) prices[v] = options.off_node_price;
   const std::vector<int> chosen =
       choose_corners(sectors, n, target, options.corner_node_price, prices);
   int reread = 0;

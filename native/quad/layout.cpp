@@ -59,16 +59,12 @@ double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
 // round of build_patches: again on the same curves (their tangents are set again where a
 // curve's tail was registered anew after a stretch of it was taken off).
 void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree) {
-  auto singular = [&](int v) {
-    return std::find(layout.attractors.begin(), layout.attractors.end(), v) !=
-           layout.attractors.end();
-  };
   for (const Curve& curve : layout.curves) {
     const int n = static_cast<int>(curve.vertices.size());  // 0: taken off the layout
     if (curve.closed || curve.link || n < 3) continue;
     std::vector<int> captured;  // the curve's ends at singular vertices
     for (int end : {curve.vertices.front(), curve.vertices.back()})
-      if (singular(end)) captured.push_back(end);
+      if (layout.attractor(end)) captured.push_back(end);
     for (int i = 1; i < n; ++i) {
       const int u = curve.vertices[i - 1], v = curve.vertices[i];
       const int h = s.mesh.find_halfedge(s.mesh.vertex_handle(u), s.mesh.vertex_handle(v)).idx();

@@ -116,8 +116,7 @@ void remove_arc(const Surface& s, Layout& layout, int c, int first, int last) {
   }
   for (int i = first; i <= last; ++i) {
     const int v = curve.vertices[i];
-    bool held = std::find(layout.attractors.begin(), layout.attractors.end(), v) !=
-                layout.attractors.end();
+    bool held = layout.attractor(v);
     for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(v)))
       held |= layout.edge_curve[oh.idx() >> 1] >= 0;
     if (!held) layout.claimed[v] = layout.node[v] = 0;
@@ -351,9 +350,9 @@ bool free_arrival(const Surface& s, const Layout& layout, size_t i, const Vec3& 
 // edge, and on the mesh split round w it can run up to half the spacing off that chord.
 bool arrival_direction(const Surface& s, const Layout& layout, const Curve& curve, Vec3* out) {
   const int w = curve.vertices.back();
-  const auto at = std::find(layout.attractors.begin(), layout.attractors.end(), w);
-  const size_t i = static_cast<size_t>(at - layout.attractors.begin());
-  if ((layout.arrival_snap <= 0 && !layout.arrival_chord) || at == layout.attractors.end() ||
+  const int at = layout.attractor_index(w);
+  const size_t i = static_cast<size_t>(at);
+  if ((layout.arrival_snap <= 0 && !layout.arrival_chord) || at < 0 ||
       i >= layout.attractor_directions.size() || layout.attractor_directions[i].empty() ||
       curve.vertices.size() < 2)
     return false;
@@ -495,8 +494,7 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
     // and near-parallel meetings end the trace.
     bool cross = false;
     if (layout.allow_crossing && layout.claimed[w] && !own && !layout.on_loop[w] &&
-        travelled < length_cap &&
-        std::find(layout.attractors.begin(), layout.attractors.end(), w) == layout.attractors.end()) {
+        travelled < length_cap && !layout.attractor(w)) {
       for (auto oh : s.mesh.voh_range(s.mesh.vertex_handle(w)))
         if (layout.edge_curve[oh.idx() >> 1] >= 0 &&
             std::abs(layout.halfedge_dir[oh.idx()].dot(d)) < 0.5)

@@ -2,6 +2,7 @@
 // field-guided tracing along mesh edges, the patch layout and its filling.
 #pragma once
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <map>
@@ -138,6 +139,18 @@ struct Layout {
   int cancelled_pairs = 0;
   int dropped_traces = 0;
   int patch_rounds = 0;  // build_patches rounds run on this layout (the search's work budget)
+  // The index of v among the attractors, -1 if it is not a traced singular vertex.
+  int attractor_index(int v) const {
+    const auto at = std::find(attractors.begin(), attractors.end(), v);
+    return at == attractors.end() ? -1 : static_cast<int>(at - attractors.begin());
+  }
+  bool attractor(int v) const { return attractor_index(v) >= 0; }
+  // Whether p lies within one of the costly_nodes spots.
+  bool costly(const Vec3& p) const {
+    for (const auto& [point, radius] : costly_nodes)
+      if ((p - point).norm() <= radius) return true;
+    return false;
+  }
 };
 
 // A walk heads straight for a singular vertex ahead once within this × the local target
