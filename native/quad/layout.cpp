@@ -55,9 +55,14 @@ double ccw_angle(const Vec3& a, const Vec3& b, const Vec3& n) {
 // ends at (a curve arriving at one keeps the separatrix direction it took there), where
 // the walk follows its way to the singularity (lattice: such a turn one cage edge before a
 // singularity, read as a corner, left an irregular vertex unexplained and 31-34 quads
-// oversized in every layout choice). O(curve vertices + curves × singularities), every
-// round of build_patches: again on the same curves (their tangents are set again where a
-// curve's tail was registered anew after a stretch of it was taken off).
+// oversized in every layout choice), except where an earlier cage of this layout left an
+// irregular vertex no singularity explains (Layout::costly_nodes, the second reading of
+// QuadOptions::off_node_price): there such a turn is read too, a singular end's included
+// (25 nets, genus 9-49 at h 0.1-0.14: 36 → 32 irregular vertices off singularities,
+// oversized / skewed quads 461 / 548 → 457 / 541; genus 64 unchanged). O(curve vertices +
+// curves × singularities + kinks × costly spots), every round of build_patches: again on
+// the same curves (their tangents are set again where a curve's tail was registered anew
+// after a stretch of it was taken off).
 void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree) {
   for (const Curve& curve : layout.curves) {
     const int n = static_cast<int>(curve.vertices.size());  // 0: taken off the layout
@@ -77,7 +82,7 @@ void mark_kinks(const Surface& s, Layout& layout, const std::vector<int>& degree
       bool on_the_way = false;
       for (int end : captured)
         on_the_way |= (s.point[v] - s.point[end]).norm() < kCaptureReach * s.vertex_size[end];
-      if (on_the_way) continue;
+      if (on_the_way && !layout.costly(s.point[v])) continue;
       if (degree[v] == 2) layout.node[v] = 1;
       layout.halfedge_dir[h ^ 1] = -curve.direction[i - 1];
     }

@@ -1867,6 +1867,45 @@ TEST(Quad, AQuarterTurnAlongACurveIsAKinkNode) {
   }
 }
 
+// A turn within kCaptureReach of a singular vertex the curve ends at is the walk's way to
+// that singularity, not read as a kink node, except where an earlier cage of the layout
+// left an irregular vertex no singularity explains (Layout::costly_nodes). The bent curve
+// of the test above, its end on the right side made a traced singular vertex whose target
+// size (2, reach 1.5) puts the bend (1 from it) within reach: the bend is no node and the
+// patches need re-reading; with a costly spot round the bend it is a node, and the three
+// patches are four-sided as they are.
+TEST(Quad, AQuarterTurnNearASingularEndIsReadOnlyWhereACageLeftAnIrregularVertexThere) {
+  constexpr int n = 21, bend = 10 * n + 10, end = 10 * n + 20;
+  const FlatGrid flat(n, 0.1);
+  quad_detail::Surface s(flat.mesh, flat.partition, flat.field, 0);
+  s.vertex_size[end] = 2.0;
+  ASSERT_LT((s.point[bend] - s.point[end]).norm(), quad_detail::kCaptureReach * s.vertex_size[end]);
+  quad_detail::Curve curve = grid_curve(n, 0, 10, 10, 10);  // up x = 1, y 0 → 1
+  const quad_detail::Curve right = grid_curve(n, 10, 10, 10, 20);
+  curve.vertices.insert(curve.vertices.end(), right.vertices.begin() + 1, right.vertices.end());
+  curve.direction.assign(curve.vertices.size(), Vec3(1, 0, 0));
+  for (int i = 0; i < 10; ++i) curve.direction[i] = Vec3(0, 1, 0);  // right from the bend on
+  for (const bool costly : {false, true}) {
+    SCOPED_TRACE(costly ? "a costly spot round the bend" : "no costly spot");
+    quad_detail::Layout layout = bounded_square_layout(s, n, curve);
+    layout.attractors = {end};
+    if (costly) layout.costly_nodes = {{s.point[bend], 0.25}};
+    quad_detail::Messages messages;
+    const quad_detail::PatchLayout patches =
+        quad_detail::build_patches(s, layout, QuadOptions{}, messages);
+    if (!costly) {
+      EXPECT_GT(patches.recornered, 0);
+      continue;
+    }
+    EXPECT_TRUE(layout.node[bend]);
+    EXPECT_EQ(layout.curves.size(), 6u);  // the sides, the curve and one cut
+    EXPECT_EQ(patches.recornered, 0);
+    ASSERT_EQ(patches.patches.size(), 3u);
+    for (const auto& patch : patches.patches)
+      for (const auto& side : patch.sides) EXPECT_FALSE(side.empty());
+  }
+}
+
 // The same where the turn falls on a node (QuadOptions::kink_nodes): on the flat square, a
 // curve across it at y = 1 and a curve up from the bottom side at x = 1 that ends on it,
 // its last recorded direction snapped to the other cross direction (along the curve it
