@@ -214,13 +214,21 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     json cages = json::array();
     for (size_t i = 0; i < result.quads.cages.size(); ++i) {
       const QuadStats& s = result.quads.stats[i];
-      json cage = {{"component", result.quads.cages[i].component},
+      const QuadCage& quad_cage = result.quads.cages[i];
+      json off = json::array();  // where they are, and the quarter turns left at each
+      for (const auto& [v, turns] : s.off_singularities)
+        off.push_back(
+            {{"position",
+              {quad_cage.vertices(v, 0), quad_cage.vertices(v, 1), quad_cage.vertices(v, 2)}},
+             {"quarter_turns", turns}});
+      json cage = {{"component", quad_cage.component},
                    {"quads", s.quads},
                    {"quad_fraction", 1.0},
                    {"interior_valence4_fraction", s.interior_valence4_fraction()},
                    {"boundary_valence3_fraction", s.boundary_valence3_fraction()},
                    {"irregular_vertices", s.irregular_vertices},
                    {"irregular_vertices_off_singularities", s.irregular_off_singularities},
+                   {"irregular_vertices_off_singularities_at", off},
                    {"mean_angle_deviation_degrees", s.mean_angle_deviation_deg},
                    {"max_angle_deviation_degrees", s.max_angle_deviation_deg},
                    {"skewed_quads", s.skewed_quads},

@@ -613,6 +613,25 @@ std::string attempt_failure(const std::exception_ptr& error) {
   }
 }
 
+// QuadStats::irregular_off_singularities and off_singularities of `cage`. Returns its
+// irregular vertices (matched_irregulars) with, in `left`, the quarter turns no singularity
+// explains at each.
+std::vector<quad_detail::Irregular> count_off_singularities(
+    const quad_detail::CageChecks& checks, const QuadCage& cage,
+    const std::vector<quad_detail::SingularPoint>& singular, double density, QuadStats* stats,
+    std::vector<int>* left) {
+  std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
+      checks, cage, quad_detail::CageIncidence(cage), singular, density, left);
+  stats->irregular_off_singularities = 0;
+  stats->off_singularities.clear();
+  for (size_t e = 0; e < irregular.size(); ++e)
+    if ((*left)[e]) {
+      ++stats->irregular_off_singularities;
+      stats->off_singularities.push_back({irregular[e].vertex, (*left)[e]});
+    }
+  return irregular;
+}
+
 // The layout's two fingerprints, set as extract_once reaches them: the traced curves (with
 // the options the rest reads) and the quantized patch layout.
 struct LayoutKeys {
@@ -821,16 +840,12 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   // The irregular vertices no singularity explains, each priced within off_node_radius ×
   // its reach (in kSingularReach units: local target edges or its own edges) if read again.
   std::vector<int> left;
-  const std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
-      checks, *cage, quad_detail::CageIncidence(*cage), singular, options.density, &left);
-  stats->irregular_off_singularities = 0;
-  for (size_t e = 0; e < irregular.size(); ++e) {
-    if (!left[e]) continue;
-    ++stats->irregular_off_singularities;
-    if (unexplained)
+  const std::vector<quad_detail::Irregular> irregular =
+      count_off_singularities(checks, *cage, singular, options.density, stats, &left);
+  for (size_t e = 0; e < irregular.size(); ++e)
+    if (left[e] && unexplained)
       unexplained->push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
                                                       quad_detail::kSingularReach});
-  }
   stats->size_field_quads = asked;
 }
 
@@ -1391,8 +1406,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       "with irregular vertices wherever triangles could not be paired");
   add_messages(untangled, out);
   square_kept(checks, variants[0].options.density / scale, c, threads, &cage, &stats, &out->notes);
-  stats.irregular_off_singularities =
-      quad_detail::irregular_off_singularities(checks, cage, singular, variants[0].options.density);
+  std::vector<int> left;
+  count_off_singularities(checks, cage, singular, variants[0].options.density, &stats, &left);
   out->cages.push_back(std::move(cage));
   stats.size_field_quads = asked;
   out->stats.push_back(stats);

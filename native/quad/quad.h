@@ -71,6 +71,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/cage.h"
@@ -343,6 +344,9 @@ struct QuadStats {
   // once): irregular vertices the layout put where the field has none
   // (quad_detail::irregular_off_singularities).
   int irregular_off_singularities = 0;
+  // Those vertices: (cage vertex, the quarter turns no singularity explains there, as
+  // 4 − quads: positive where the vertex has fewer than four quads, e.g. 1 at valence 3).
+  std::vector<std::pair<int, int>> off_singularities;
   // The quads the size field asks for on the component at the density used (after any
   // raise for dense singularities): Σ area / (size_u · size_v) · density² over its faces.
   // quads / size_field_quads is how closely the cage's density follows the field's.

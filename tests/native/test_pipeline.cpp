@@ -93,6 +93,34 @@ TEST(Pipeline, TwoArchesGiveTwoComponentsAndFourLoops) {
   EXPECT_TRUE(report["diagnostics"].empty()) << report["diagnostics"];
 }
 
+// report.json says where each cage's irregular vertices that no field singularity explains
+// are, and the quarter turns left at each: none on the two arches (every irregular vertex
+// explained); a listed vertex (as the quad stage lists them) is written at its cage
+// position.
+TEST(Pipeline, TheReportSaysWhereTheIrregularVerticesOffSingularitiesAre) {
+  const Scene s = two_arches_scene(0.05);
+  Options options;
+  options.until = "quad";
+  Result r = convert(inputs_of(s), options, Context());
+  const auto report = nlohmann::json::parse(r.report_json);
+  ASSERT_EQ(report["cages"].size(), 2u);
+  for (const auto& cage : report["cages"]) {
+    EXPECT_EQ(cage["irregular_vertices_off_singularities"], 0);
+    EXPECT_TRUE(cage["irregular_vertices_off_singularities_at"].empty());
+  }
+  ASSERT_EQ(r.quads.cages.size(), 2u);
+  const int v = static_cast<int>(r.quads.cages[1].vertices.rows()) / 2;
+  r.quads.stats[1].irregular_off_singularities = 1;
+  r.quads.stats[1].off_singularities = {{v, -1}};
+  const auto listed = nlohmann::json::parse(make_report(inputs_of(s), options, r));
+  const auto& at = listed["cages"][1]["irregular_vertices_off_singularities_at"];
+  ASSERT_EQ(at.size(), 1u);
+  EXPECT_EQ(at[0]["quarter_turns"], -1);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_DOUBLE_EQ(at[0]["position"][k].get<double>(), r.quads.cages[1].vertices(v, k));
+  EXPECT_TRUE(listed["cages"][0]["irregular_vertices_off_singularities_at"].empty());
+}
+
 TEST(Pipeline, SameInputGivesSameOutput) {
   const Scene s = bolt_hole_scene(0.06);
   const Result a = convert(inputs_of(s), Options{}, Context());

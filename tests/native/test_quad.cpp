@@ -1576,6 +1576,29 @@ QuadResult requested_net4_cage(const Partitioned& r, const CrossField& field,
   return result;
 }
 
+// QuadStats::off_singularities lists the interior vertices irregular_off_singularities
+// counts, each with quarter turns of the sign and at most the size of what it carries
+// (4 − quads).
+void expect_off_singularities_listed(const QuadResult& result) {
+  const QuadCage& cage = result.cages[0];
+  const QuadStats& s = result.stats[0];
+  EXPECT_EQ(static_cast<int>(s.off_singularities.size()), s.irregular_off_singularities);
+  std::vector<int> quads(cage.vertices.rows(), 0);
+  for (int q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) ++quads[cage.quads(q, k)];
+  std::set<int> on_chain;
+  for (const auto& chain : cage.boundary_chains) on_chain.insert(chain.begin(), chain.end());
+  for (const auto& [v, turns] : s.off_singularities) {
+    ASSERT_GE(v, 0);
+    ASSERT_LT(v, cage.vertices.rows());
+    EXPECT_FALSE(on_chain.count(v)) << v;
+    const int carries = 4 - quads[v];
+    EXPECT_NE(turns, 0) << v;
+    EXPECT_GT(turns * carries, 0) << v << ": " << turns << " left of " << carries;
+    EXPECT_LE(std::abs(turns), std::abs(carries)) << v;
+  }
+}
+
 // On a net of genus 16 (h = 0.1) the requested layout with its corners chosen together
 // leaves fewer irregular vertices that no field singularity explains than with each patch's
 // corners fitted alone (measured from the requested layout alone: 7 against 29 at node
@@ -1599,6 +1622,7 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
         together ? "net 4x4, corners together" : "net 4x4, corners alone");
     ASSERT_EQ(result.stats.size(), 1u);
     off[together] = result.stats[0].irregular_off_singularities;
+    expect_off_singularities_listed(result);
   }
   EXPECT_LT(off[1], off[0]);
 }
