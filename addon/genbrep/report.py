@@ -70,6 +70,38 @@ def stage_seconds(report):
     return pairs
 
 
+def cage_lines(report, max_points=4):
+    """Per cage of the report: its quads and how regular they are, where its irregular
+    vertices that no field singularity explains are, its fit; and the components that got
+    no cage, with why."""
+    lines = []
+    for index, cage in enumerate(report.get("cages") or ()):
+        fallback = str(cage.get("method", "")).startswith("fallback")
+        lines.append(
+            f"  cage {index} (component {cage.get('component', index)}): "
+            f"{cage.get('quads', 0)} quads{' FALLBACK, not field-aligned' if fallback else ''}, "
+            f"corners {cage.get('mean_angle_deviation_degrees', 0.0):.1f}° off square on average")
+        lines.append(
+            f"    valence 4 inside {100 * cage.get('interior_valence4_fraction', 1.0):.1f}%, "
+            f"3 on the boundary {100 * cage.get('boundary_valence3_fraction', 1.0):.1f}%; "
+            f"{cage.get('irregular_vertices', 0)} irregular, "
+            f"{cage.get('irregular_vertices_off_singularities', 0)} away from singularities")
+        off = cage.get("irregular_vertices_off_singularities_at") or ()
+        if off:
+            shown = ", ".join(
+                "({:.4g}, {:.4g}, {:.4g}) {:+d}".format(*point["position"], point["quarter_turns"])
+                for point in off[:max_points])
+            more = f", ... ({len(off)} in all)" if len(off) > max_points else ""
+            lines.append(f"    away from singularities (quarter turns): {shown}{more}")
+        fit = cage.get("fit")
+        if fit:
+            lines.append(f"    fit: design to limit surface rms {fit.get('rms_design_to_limit', 0.0):.4g}, "
+                         f"max {fit.get('max_design_to_limit', 0.0):.4g}")
+    for failure in report.get("cage_failures") or ():
+        lines.append(f"  component {failure.get('component')}: no cage ({failure.get('reason')})")
+    return ["cages:"] + lines if lines else []
+
+
 def report_lines(report, notes=()):
     """Report as short lines for the panel and the console, warnings last."""
     report = report or {}
@@ -85,6 +117,7 @@ def report_lines(report, notes=()):
         lines.extend(f"  {key}: {format_value(value)}" for key, value in counts.items())
     if report.get("tolerance") is not None:
         lines.append(f"tolerance: {format_value(report['tolerance'])}")
+    lines.extend(cage_lines(report))
     shown = {"stages", "counts", "tolerance", "diagnostics", "notes", "seconds_total"}
     for key, value in report.items():
         if key not in shown and isinstance(value, (int, float, str, bool)):

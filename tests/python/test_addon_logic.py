@@ -292,6 +292,41 @@ def test_report_lines():
         "warning: loop 3 repaired"]
 
 
+CAGES = [{"component": 0, "quads": 3903, "interior_valence4_fraction": 0.978,
+          "boundary_valence3_fraction": 1.0, "irregular_vertices": 84,
+          "irregular_vertices_off_singularities": 0, "irregular_vertices_off_singularities_at": [],
+          "mean_angle_deviation_degrees": 3.69, "method": "field-aligned patch layout",
+          "fit": {"rms_design_to_limit": 0.0032, "max_design_to_limit": 0.015}},
+         {"component": 2, "quads": 120, "interior_valence4_fraction": 0.5,
+          "boundary_valence3_fraction": 0.9, "irregular_vertices": 30,
+          "irregular_vertices_off_singularities": 5,
+          "irregular_vertices_off_singularities_at": [
+              {"position": [float(k), 0.5, -0.25], "quarter_turns": -1 if k % 2 else 1}
+              for k in range(5)],
+          "mean_angle_deviation_degrees": 20.0,
+          "method": "fallback: split coarse remesh, not field-aligned"}]
+
+
+def test_cage_lines_say_how_regular_each_cage_is_and_where_it_is_not():
+    lines = report.cage_lines({"cages": CAGES,
+                               "cage_failures": [{"component": 1, "reason": "too thin"}]})
+    assert lines == [
+        "cages:",
+        "  cage 0 (component 0): 3903 quads, corners 3.7° off square on average",
+        "    valence 4 inside 97.8%, 3 on the boundary 100.0%; 84 irregular, 0 away from "
+        "singularities",
+        "    fit: design to limit surface rms 0.0032, max 0.015",
+        "  cage 1 (component 2): 120 quads FALLBACK, not field-aligned, corners 20.0° off "
+        "square on average",
+        "    valence 4 inside 50.0%, 3 on the boundary 90.0%; 30 irregular, 5 away from "
+        "singularities",
+        "    away from singularities (quarter turns): (0, 0.5, -0.25) +1, (1, 0.5, -0.25) -1, "
+        "(2, 0.5, -0.25) +1, (3, 0.5, -0.25) -1, ... (5 in all)",
+        "  component 1: no cage (too thin)"]
+    assert report.cage_lines(REPORT) == []
+    assert "cages:" in report.report_lines(dict(REPORT, cages=CAGES))
+
+
 def test_notes_are_not_warnings():
     assert report.warning_count(REPORT) == 1
     assert report.warning_count(dict(REPORT, diagnostics=[])) == 0
