@@ -88,11 +88,13 @@ def cage_lines(report, max_points=4):
             f"{cage.get('irregular_vertices_off_singularities', 0)} away from singularities")
         off = cage.get("irregular_vertices_off_singularities_at") or ()
         if off:
-            shown = ", ".join(
-                "({:.4g}, {:.4g}, {:.4g}) {:+d}".format(*point["position"], point["quarter_turns"])
+            shown = "; ".join(
+                "({:.4g}, {:.4g}, {:.4g}) valence {}, {:+d}".format(
+                    *point["position"], point.get("valence", "?"), point["quarter_turns"])
                 for point in off[:max_points])
-            more = f", ... ({len(off)} in all)" if len(off) > max_points else ""
-            lines.append(f"    away from singularities (quarter turns): {shown}{more}")
+            more = f"; ... ({len(off)} in all)" if len(off) > max_points else ""
+            lines.append(f"    away from singularities (valence, quarter turns unexplained): "
+                         f"{shown}{more}")
         fit = cage.get("fit")
         if fit:
             lines.append(f"    fit: design to limit surface rms {fit.get('rms_design_to_limit', 0.0):.4g}, "

@@ -215,11 +215,12 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
     for (size_t i = 0; i < result.quads.cages.size(); ++i) {
       const QuadStats& s = result.quads.stats[i];
       const QuadCage& quad_cage = result.quads.cages[i];
-      json off = json::array();  // where they are, and the quarter turns left at each
-      for (const auto& [v, turns] : s.off_singularities)
+      json off = json::array();  // where they are, their valence, the quarter turns left
+      for (const auto& [v, valence, turns] : s.off_singularities)
         off.push_back(
             {{"position",
               {quad_cage.vertices(v, 0), quad_cage.vertices(v, 1), quad_cage.vertices(v, 2)}},
+             {"valence", valence},
              {"quarter_turns", turns}});
       json cage = {{"component", quad_cage.component},
                    {"quads", s.quads},

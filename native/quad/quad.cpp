@@ -627,7 +627,8 @@ std::vector<quad_detail::Irregular> count_off_singularities(
   for (size_t e = 0; e < irregular.size(); ++e)
     if ((*left)[e]) {
       ++stats->irregular_off_singularities;
-      stats->off_singularities.push_back({irregular[e].vertex, (*left)[e]});
+      stats->off_singularities.push_back(
+          {irregular[e].vertex, 4 - irregular[e].carries, (*left)[e]});
     }
   return irregular;
 }

@@ -344,9 +344,15 @@ struct QuadStats {
   // once): irregular vertices the layout put where the field has none
   // (quad_detail::irregular_off_singularities).
   int irregular_off_singularities = 0;
-  // Those vertices: (cage vertex, the quarter turns no singularity explains there, as
-  // 4 − quads: positive where the vertex has fewer than four quads, e.g. 1 at valence 3).
-  std::vector<std::pair<int, int>> off_singularities;
+  // Those vertices, each with the quarter turns no singularity explains there (of the
+  // 4 − quads it carries: 1 at valence 3, −1 at valence 5; a vertex of valence 7 beside
+  // two −1 singularities has −1 left).
+  struct OffSingularity {
+    int vertex;         // of the cage
+    int valence;        // quads at it
+    int quarter_turns;  // left unexplained
+  };
+  std::vector<OffSingularity> off_singularities;
   // The quads the size field asks for on the component at the density used (after any
   // raise for dense singularities): Σ area / (size_u · size_v) · density² over its faces.
   // quads / size_field_quads is how closely the cage's density follows the field's.

@@ -111,11 +111,12 @@ TEST(Pipeline, TheReportSaysWhereTheIrregularVerticesOffSingularitiesAre) {
   ASSERT_EQ(r.quads.cages.size(), 2u);
   const int v = static_cast<int>(r.quads.cages[1].vertices.rows()) / 2;
   r.quads.stats[1].irregular_off_singularities = 1;
-  r.quads.stats[1].off_singularities = {{v, -1}};
+  r.quads.stats[1].off_singularities = {{v, 5, -1}};
   const auto listed = nlohmann::json::parse(make_report(inputs_of(s), options, r));
   const auto& at = listed["cages"][1]["irregular_vertices_off_singularities_at"];
   ASSERT_EQ(at.size(), 1u);
   EXPECT_EQ(at[0]["quarter_turns"], -1);
+  EXPECT_EQ(at[0]["valence"], 5);
   for (int k = 0; k < 3; ++k)
     EXPECT_DOUBLE_EQ(at[0]["position"][k].get<double>(), r.quads.cages[1].vertices(v, k));
   EXPECT_TRUE(listed["cages"][0]["irregular_vertices_off_singularities_at"].empty());

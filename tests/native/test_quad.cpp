@@ -1577,8 +1577,8 @@ QuadResult requested_net4_cage(const Partitioned& r, const CrossField& field,
 }
 
 // QuadStats::off_singularities lists the interior vertices irregular_off_singularities
-// counts, each with quarter turns of the sign and at most the size of what it carries
-// (4 − quads).
+// counts, each with its valence and quarter turns of the sign and at most the size of what
+// it carries (4 − quads).
 void expect_off_singularities_listed(const QuadResult& result) {
   const QuadCage& cage = result.cages[0];
   const QuadStats& s = result.stats[0];
@@ -1588,10 +1588,11 @@ void expect_off_singularities_listed(const QuadResult& result) {
     for (int k = 0; k < 4; ++k) ++quads[cage.quads(q, k)];
   std::set<int> on_chain;
   for (const auto& chain : cage.boundary_chains) on_chain.insert(chain.begin(), chain.end());
-  for (const auto& [v, turns] : s.off_singularities) {
+  for (const auto& [v, valence, turns] : s.off_singularities) {
     ASSERT_GE(v, 0);
     ASSERT_LT(v, cage.vertices.rows());
     EXPECT_FALSE(on_chain.count(v)) << v;
+    EXPECT_EQ(valence, quads[v]) << v;
     const int carries = 4 - quads[v];
     EXPECT_NE(turns, 0) << v;
     EXPECT_GT(turns * carries, 0) << v << ": " << turns << " left of " << carries;

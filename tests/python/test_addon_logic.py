@@ -301,7 +301,8 @@ CAGES = [{"component": 0, "quads": 3903, "interior_valence4_fraction": 0.978,
           "boundary_valence3_fraction": 0.9, "irregular_vertices": 30,
           "irregular_vertices_off_singularities": 5,
           "irregular_vertices_off_singularities_at": [
-              {"position": [float(k), 0.5, -0.25], "quarter_turns": -1 if k % 2 else 1}
+              {"position": [float(k), 0.5, -0.25], "valence": 5 if k % 2 else 3,
+               "quarter_turns": -1 if k % 2 else 1}
               for k in range(5)],
           "mean_angle_deviation_degrees": 20.0,
           "method": "fallback: split coarse remesh, not field-aligned"}]
@@ -320,8 +321,9 @@ def test_cage_lines_say_how_regular_each_cage_is_and_where_it_is_not():
         "square on average",
         "    valence 4 inside 50.0%, 3 on the boundary 90.0%; 30 irregular, 5 away from "
         "singularities",
-        "    away from singularities (quarter turns): (0, 0.5, -0.25) +1, (1, 0.5, -0.25) -1, "
-        "(2, 0.5, -0.25) +1, (3, 0.5, -0.25) -1, ... (5 in all)",
+        "    away from singularities (valence, quarter turns unexplained): (0, 0.5, -0.25) "
+        "valence 3, +1; (1, 0.5, -0.25) valence 5, -1; (2, 0.5, -0.25) valence 3, +1; "
+        "(3, 0.5, -0.25) valence 5, -1; ... (5 in all)",
         "  component 1: no cage (too thin)"]
     assert report.cage_lines(REPORT) == []
     assert "cages:" in report.report_lines(dict(REPORT, cages=CAGES))
