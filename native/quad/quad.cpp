@@ -676,21 +676,44 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
   return patches;
 }
 
-// One attempt at one component: layout, quantization, filling. Throws Error{StageFailure}
-// when the layout cannot be quantized or the filled cage is invalid, or when a fingerprint
-// is in `seen` (a layout an earlier choice already had), or once `dropped`. Reads only its
-// arguments, so attempts run on several threads at once. `asked`: the quads the size field
-// asks for (QuadStats::size_field_quads). `costly_nodes`: the layout's Layout::costly_nodes.
-// `unexplained` (optional) receives, per irregular vertex of the cage no singularity
-// explains, the spot a second reading prices higher (read_off_nodes_again).
-void extract_once(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
-                  const std::vector<quad_detail::SingularPoint>& singular,
-                  const QuadOptions& options, double asked, const std::set<std::size_t>& seen,
-                  LayoutKeys* keys, QuadCage* cage, QuadStats* stats,
-                  quad_detail::Messages* messages, AttemptWork* work,
-                  const quad_detail::Dropped& dropped,
-                  const std::vector<std::pair<Vec3, double>>& costly_nodes = {},
-                  std::vector<std::pair<Vec3, double>>* unexplained = nullptr) {
+// What every attempt at one component reads, the same for all of them: the (refined)
+// surface the layout is traced on, the checks on the unrefined component, the field's
+// singularities there, and the quads the size field asks for (QuadStats::size_field_quads).
+struct ComponentInputs {
+  const quad_detail::Surface& surface;
+  const quad_detail::CageChecks& checks;
+  const std::vector<quad_detail::SingularPoint>& singular;
+  double asked;
+};
+
+// What one reading of a layout gives: its fingerprints, the cage with its statistics and
+// messages, the work spent, and per irregular vertex of the cage no singularity explains
+// the spot a second reading prices higher (read_off_nodes_again).
+struct Reading {
+  LayoutKeys keys;
+  QuadCage cage;
+  QuadStats stats;
+  quad_detail::Messages messages;
+  AttemptWork work;
+  std::vector<std::pair<Vec3, double>> unexplained;
+};
+
+// One attempt at one component: layout, quantization, filling, into *out. Throws
+// Error{StageFailure} when the layout cannot be quantized or the filled cage is invalid,
+// or when a fingerprint is in `seen` (a layout an earlier choice already had), or once
+// `dropped`. Reads only its arguments, so attempts run on several threads at once.
+// `costly_nodes`: the layout's Layout::costly_nodes.
+void extract_once(const ComponentInputs& in, const QuadOptions& options,
+                  const std::set<std::size_t>& seen, const quad_detail::Dropped& dropped,
+                  const std::vector<std::pair<Vec3, double>>& costly_nodes, Reading* out) {
+  const quad_detail::Surface& surface = in.surface;
+  const quad_detail::CageChecks& checks = in.checks;
+  const std::vector<quad_detail::SingularPoint>& singular = in.singular;
+  LayoutKeys* keys = &out->keys;
+  QuadCage* cage = &out->cage;
+  QuadStats* stats = &out->stats;
+  quad_detail::Messages* messages = &out->messages;
+  AttemptWork* work = &out->work;
   const auto start = std::chrono::steady_clock::now();
   const int c = surface.component;
   quad_detail::Layout layout = quad_detail::start_layout(surface);
@@ -843,41 +866,34 @@ void extract_once(const quad_detail::Surface& surface, const quad_detail::CageCh
   std::vector<int> left;
   const std::vector<quad_detail::Irregular> irregular =
       count_off_singularities(checks, *cage, singular, options.density, stats, &left);
+  out->unexplained.clear();
   for (size_t e = 0; e < irregular.size(); ++e)
-    if (left[e] && unexplained)
-      unexplained->push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
-                                                      quad_detail::kSingularReach});
-  stats->size_field_quads = asked;
+    if (left[e])
+      out->unexplained.push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
+                                                          quad_detail::kSingularReach});
+  stats->size_field_quads = in.asked;
 }
 
 // QuadOptions::off_node_price: the layout of `options` traced and read again, the nodes
-// near the irregular vertices `cage` has away from singularities priced higher; the better
-// of the two cages (better_cage) is kept in *cage, *stats, *messages, and the work of both
-// is counted. A second attempt that fails leaves the first as it was. `costly`: those
-// nodes, as the first attempt gave them (extract_once's `unexplained`).
-void read_off_nodes_again(const quad_detail::Surface& surface,
-                          const quad_detail::CageChecks& checks,
-                          const std::vector<quad_detail::SingularPoint>& singular,
-                          const QuadOptions& options, double asked,
-                          const std::vector<std::pair<Vec3, double>>& costly,
-                          const quad_detail::Dropped& dropped, QuadCage* cage, QuadStats* stats,
-                          quad_detail::Messages* messages, AttemptWork* work) {
-  LayoutKeys keys;
-  QuadCage again;
-  QuadStats again_stats;
-  quad_detail::Messages again_messages;
-  AttemptWork again_work;
+// near the irregular vertices the first reading left away from singularities (its
+// `unexplained`) priced higher; the better of the two cages (better_cage) is kept in
+// *first (cage, stats, messages), and the work of both is counted. A second attempt that
+// fails leaves the first as it was.
+void read_off_nodes_again(const ComponentInputs& in, const QuadOptions& options,
+                          const quad_detail::Dropped& dropped, Reading* first) {
+  Reading again;
   std::string failure;
   try {
-    extract_once(surface, checks, singular, options, asked, {}, &keys, &again, &again_stats,
-                 &again_messages, &again_work, dropped, costly);
+    extract_once(in, options, {}, dropped, first->unexplained, &again);
   } catch (const Error& e) {
     if (e.code() != Code::StageFailure) throw;
     failure = e.what();
   }
-  work->total += again_work.total;
+  first->work.total += again.work.total;
   dropped.check();
-  const int c = surface.component, before = stats->irregular_off_singularities;
+  QuadStats* stats = &first->stats;
+  quad_detail::Messages* messages = &first->messages;
+  const int c = in.surface.component, before = stats->irregular_off_singularities;
   const std::string head = "component " + std::to_string(c) + ": the layout read again with " +
                            "the nodes near its " + std::to_string(before) +
                            " irregular vertices away from singularities priced higher";
@@ -885,17 +901,18 @@ void read_off_nodes_again(const quad_detail::Surface& surface,
     messages->notes.push_back(head + " failed (" + failure + "); the first reading kept");
     return;
   }
-  const int after = again_stats.irregular_off_singularities;
-  if (!quad_detail::better_cage(again_stats, *stats)) {
+  const int after = again.stats.irregular_off_singularities;
+  if (!quad_detail::better_cage(again.stats, *stats)) {
     messages->notes.push_back(head + ": " + std::to_string(after) +
                               " away from singularities, not better; the first reading kept");
     return;
   }
-  again_messages.notes.push_back(head + ": " + std::to_string(before) + " → " +
+  again.messages.notes.push_back(head + ": " + std::to_string(before) + " → " +
                                  std::to_string(after) + " away from singularities");
-  *cage = std::move(again);
-  *stats = again_stats;
-  *messages = std::move(again_messages);
+  first->cage = std::move(again.cage);
+  *stats = again.stats;
+  *messages = std::move(again.messages);
+  first->unexplained = std::move(again.unexplained);
 }
 
 // How often the component's triangles are split for tracing (QuadOptions::
@@ -1160,13 +1177,9 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       1, options.parallel_choices > 0
              ? options.parallel_choices
              : std::min(4, static_cast<int>(std::thread::hardware_concurrency())));
-  struct Attempt {
-    LayoutKeys keys;
-    QuadCage cage;
-    QuadStats stats;
-    quad_detail::Messages messages;
+  const ComponentInputs inputs{surface, checks, singular, asked};
+  struct Attempt : Reading {
     std::exception_ptr error;
-    AttemptWork work;
     // A cage that meets the targets but for its corner angles is squared before it is
     // judged (the targets are the output cage's, and squaring makes it): the copy, if it
     // came closer to 90°. Choices are still compared on the angles before squaring.
@@ -1198,13 +1211,10 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                      const quad_detail::Dropped& dropped) {
     try {
       const QuadOptions& o = variants[k].options;
-      std::vector<std::pair<Vec3, double>> unexplained;
-      extract_once(surface, checks, singular, o, asked, seen, &a->keys, &a->cage, &a->stats,
-                   &a->messages, &a->work, dropped, {}, &unexplained);
+      extract_once(inputs, o, seen, dropped, {}, a);
       const int off = a->stats.irregular_off_singularities;
       if (o.off_node_price > 0 && off > 0 && off >= o.off_node_share * a->stats.irregular_vertices)
-        read_off_nodes_again(surface, checks, singular, o, asked, unexplained, dropped, &a->cage,
-                             &a->stats, &a->messages, &a->work);
+        read_off_nodes_again(inputs, o, dropped, a);
     } catch (...) {
       a->error = std::current_exception();
       a->dropped = dropped.stopped();
