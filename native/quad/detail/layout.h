@@ -156,7 +156,8 @@ struct Layout {
 // A walk heads straight for a singular vertex ahead once within this × the local target
 // edge length (at density 1) of it (trace_direction): its last steps there follow the way
 // to the singularity, not the field, so a turn against the field among them is not read
-// as a corner (QuadOptions::kink_nodes).
+// as a corner (QuadOptions::kink_nodes), except near an irregular vertex an earlier cage
+// of the layout left unexplained (Layout::costly_nodes; layout.cpp: mark_kinks).
 constexpr double kCaptureReach = 0.75;
 
 // Starts a layout from the component's loops (nodes at boundary singularities).
