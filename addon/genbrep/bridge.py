@@ -97,14 +97,44 @@ def _reverse_polygons(corners, sizes):
     return out
 
 
+def group_weights(obj):
+    """Per vertex group of obj, by name: {vertex index: weight} of the vertices in it."""
+    names = {group.index: group.name for group in obj.vertex_groups}
+    weights = {name: {} for name in names.values()}
+    for vertex in obj.data.vertices:
+        for element in vertex.groups:
+            if element.group in names:
+                weights[names[element.group]][vertex.index] = element.weight
+    return weights
+
+
+def set_group_weights(obj, weights):
+    """Put back group_weights' result: the groups (made again where the mesh does not
+    have them: from Blender 3.0 their names live on the mesh) with their vertices that the
+    mesh still has."""
+    count = len(obj.data.vertices)
+    for name, members in weights.items():
+        group = obj.vertex_groups.get(name) or obj.vertex_groups.new(name=name)
+        by_weight = {}
+        for v, w in members.items():
+            if v < count:
+                by_weight.setdefault(w, []).append(v)
+        for w, vertices in by_weight.items():
+            group.add(vertices, w, "REPLACE")
+
+
 def replace_mesh_data(obj, vertices, faces):
-    """Give obj a new mesh (vertices in world space), keeping its modifiers and materials."""
+    """Give obj a new mesh (vertices in world space), keeping its modifiers, materials and
+    vertex groups. The vertices keep their indices (the pull appends the vertices it adds),
+    so each group keeps its members."""
     old = obj.data
+    weights = group_weights(obj)
     mesh = new_mesh(old.name, np.asarray(vertices) @ np.linalg.inv(np.array(obj.matrix_world))[:3, :3].T
                     + np.linalg.inv(np.array(obj.matrix_world))[:3, 3], faces)
     for material in old.materials:
         mesh.materials.append(material)
     obj.data = mesh
+    set_group_weights(obj, weights)
     if old.users == 0:
         bpy.data.meshes.remove(old)
     return mesh
@@ -348,6 +378,10 @@ def _write_cages(collection, design_name, cages):
         obj = _link(collection, name, mesh)
         obj["genbrep_component"] = component
         add_subdivision(obj, cage.get("subdivision"))
+        off = np.asarray(cage.get("irregular_off_singularities", ()), dtype=np.int64).ravel()
+        if off.size:
+            group = obj.vertex_groups.new(name=results.OFF_SINGULARITIES_GROUP)
+            group.add(off[off < len(mesh.vertices)].tolist(), 1.0, "REPLACE")
         obj.show_wire = True
         written.append(obj)
     return written

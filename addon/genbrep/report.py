@@ -8,6 +8,8 @@ missing keys and stages it does not know, so it keeps working as the pipeline gr
 
 import json
 
+from . import results
+
 
 def overall_fraction(stage, fraction, stages):
     """Progress of the whole run in [0, 1] from the current stage and its fraction."""
@@ -95,6 +97,8 @@ def cage_lines(report, max_points=4):
             more = f"; ... ({len(off)} in all)" if len(off) > max_points else ""
             lines.append(f"    away from singularities (valence, quarter turns unexplained): "
                          f"{shown}{more}")
+            lines.append(f"    (the cage's vertex group '{results.OFF_SINGULARITIES_GROUP}' "
+                         f"selects them in Edit Mode)")
         fit = cage.get("fit")
         if fit:
             lines.append(f"    fit: design to limit surface rms {fit.get('rms_design_to_limit', 0.0):.4g}, "

@@ -12,6 +12,8 @@ PARTITION_SOLID_ATTRIBUTE = "genbrep_solid"          # int per face: solid index
 PARTITION_COMPONENT_ATTRIBUTE = "genbrep_component"  # int per face: component, -1 incident
 PARTITION_COLOR_ATTRIBUTE = "genbrep_partition"      # colour per face corner
 SOURCE_ATTRIBUTE = "genbrep_source"                  # int per face: input triangle index
+# vertex group per cage: its irregular vertices no field singularity explains
+OFF_SINGULARITIES_GROUP = "genbrep irregular off singularities"
 REPORT_PROPERTY = "genbrep_report"                   # JSON report on the result collection
 DESIGN_PROPERTY = "genbrep_design"                   # design name on the result collection
 

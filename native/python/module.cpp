@@ -98,6 +98,19 @@ SolidInput to_solid(const py::handle& obj, size_t i) {
   return solid;
 }
 
+// The cage vertices of `cage`'s component that are irregular where no field singularity
+// explains it (QuadStats::off_singularities). Fitting and pulling keep the quad stage's
+// vertices first, in order (split_chords, pull), so its indices hold in the final cage.
+std::vector<int> off_singularity_vertices(const Result& result, const QuadCage& cage) {
+  std::vector<int> out;
+  for (size_t i = 0; i < result.quads.cages.size() && i < result.quads.stats.size(); ++i) {
+    if (result.quads.cages[i].component != cage.component) continue;
+    for (const auto& off : result.quads.stats[i].off_singularities)
+      if (off.vertex < cage.vertices.rows()) out.push_back(off.vertex);
+  }
+  return out;
+}
+
 // The cages to hand on (final_cages: pulled where compose used them) as dicts.
 py::list cages_list(const Result& result) {
   py::list cages;
@@ -119,6 +132,7 @@ py::list cages_list(const Result& result) {
     scheme["quality"] = cage.scheme.quality;
     scheme["levels"] = cage.scheme.levels;
     c["subdivision"] = scheme;
+    c["irregular_off_singularities"] = vector_to_array(off_singularity_vertices(result, cage));
     cages.append(c);
   }
   return cages;

@@ -88,3 +88,31 @@ def test_partition_only_result_is_written(empty_scene):
     per_face = colours.reshape(-1, 3, 4)[:, 0]
     assert not np.allclose(per_face[0], per_face[3])  # two different solids
     np.testing.assert_allclose(per_face[1], per_face[2])  # the same organic component
+
+
+def _members(obj, name):
+    group = obj.vertex_groups[name].index
+    return {v.index: round(e.weight, 3) for v in obj.data.vertices for e in v.groups
+            if e.group == group}
+
+
+def test_irregular_vertices_off_singularities_are_a_vertex_group_kept_through_recompose(
+        empty_scene):
+    result = _result()
+    result["cages"].append(dict(result["cages"][0], name="leg", component=1,
+                                irregular_off_singularities=np.array([0, 7], np.int32)))
+    collection = bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], result, "{}")
+    arm, leg = collection.objects["part cage arm"], collection.objects["part cage leg"]
+    # No group on a cage without such vertices; on the other, exactly the listed ones.
+    assert results.OFF_SINGULARITIES_GROUP not in arm.vertex_groups
+    assert _members(leg, results.OFF_SINGULARITIES_GROUP) == {0: 1.0, 7: 1.0}
+    # A group of the user's own, and the pulled cage of a recompose: moved vertices and an
+    # appended one (the pull keeps the cage's vertices first). Both groups keep their members.
+    mine = leg.vertex_groups.new(name="mine")
+    mine.add([3], 0.5, "REPLACE")
+    vertices, quads = _cube_cage()
+    pulled = np.vstack([vertices * 1.1, [[0, 0, 2]]])
+    mesh = bridge.replace_mesh_data(leg, pulled, quads)
+    assert leg.data == mesh and len(mesh.vertices) == 9
+    assert _members(leg, results.OFF_SINGULARITIES_GROUP) == {0: 1.0, 7: 1.0}
+    assert _members(leg, "mine") == {3: 0.5}

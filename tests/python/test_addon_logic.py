@@ -324,6 +324,8 @@ def test_cage_lines_say_how_regular_each_cage_is_and_where_it_is_not():
         "    away from singularities (valence, quarter turns unexplained): (0, 0.5, -0.25) "
         "valence 3, +1; (1, 0.5, -0.25) valence 5, -1; (2, 0.5, -0.25) valence 3, +1; "
         "(3, 0.5, -0.25) valence 5, -1; ... (5 in all)",
+        "    (the cage's vertex group 'genbrep irregular off singularities' selects them in "
+        "Edit Mode)",
         "  component 1: no cage (too thin)"]
     assert report.cage_lines(REPORT) == []
     assert "cages:" in report.report_lines(dict(REPORT, cages=CAGES))
