@@ -613,24 +613,23 @@ std::string attempt_failure(const std::exception_ptr& error) {
   }
 }
 
-// QuadStats::irregular_off_singularities and off_singularities of `cage`. Returns its
-// irregular vertices (matched_irregulars) with, in `left`, the quarter turns no singularity
-// explains at each.
+// QuadStats::irregular_off_singularities and off_singularities of `cage`. Returns those
+// vertices (matched_irregulars' entries with quarter turns no singularity explains).
 std::vector<quad_detail::Irregular> count_off_singularities(
     const quad_detail::CageChecks& checks, const QuadCage& cage,
-    const std::vector<quad_detail::SingularPoint>& singular, double density, QuadStats* stats,
-    std::vector<int>* left) {
-  std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
-      checks, cage, quad_detail::CageIncidence(cage), singular, density, left);
-  stats->irregular_off_singularities = 0;
+    const std::vector<quad_detail::SingularPoint>& singular, double density, QuadStats* stats) {
+  std::vector<int> left;
+  const std::vector<quad_detail::Irregular> irregular = quad_detail::matched_irregulars(
+      checks, cage, quad_detail::CageIncidence(cage), singular, density, &left);
+  std::vector<quad_detail::Irregular> off;
   stats->off_singularities.clear();
   for (size_t e = 0; e < irregular.size(); ++e)
-    if ((*left)[e]) {
-      ++stats->irregular_off_singularities;
-      stats->off_singularities.push_back(
-          {irregular[e].vertex, 4 - irregular[e].carries, (*left)[e]});
+    if (left[e]) {
+      off.push_back(irregular[e]);
+      stats->off_singularities.push_back({irregular[e].vertex, 4 - irregular[e].carries, left[e]});
     }
-  return irregular;
+  stats->irregular_off_singularities = static_cast<int>(off.size());
+  return off;
 }
 
 // The layout's two fingerprints, set as extract_once reaches them: the traced curves (with
@@ -863,14 +862,11 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
                     std::to_string(stats->degenerate_quads) + " degenerate quads");
   // The irregular vertices no singularity explains, each priced within off_node_radius ×
   // its reach (in kSingularReach units: local target edges or its own edges) if read again.
-  std::vector<int> left;
-  const std::vector<quad_detail::Irregular> irregular =
-      count_off_singularities(checks, *cage, singular, options.density, stats, &left);
   out->unexplained.clear();
-  for (size_t e = 0; e < irregular.size(); ++e)
-    if (left[e])
-      out->unexplained.push_back({irregular[e].point, options.off_node_radius * irregular[e].reach /
-                                                          quad_detail::kSingularReach});
+  for (const quad_detail::Irregular& x :
+       count_off_singularities(checks, *cage, singular, options.density, stats))
+    out->unexplained.push_back(
+        {x.point, options.off_node_radius * x.reach / quad_detail::kSingularReach});
   stats->size_field_quads = in.asked;
 }
 
@@ -1417,8 +1413,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       "with irregular vertices wherever triangles could not be paired");
   add_messages(untangled, out);
   square_kept(checks, variants[0].options.density / scale, c, threads, &cage, &stats, &out->notes);
-  std::vector<int> left;
-  count_off_singularities(checks, cage, singular, variants[0].options.density, &stats, &left);
+  count_off_singularities(checks, cage, singular, variants[0].options.density, &stats);
   out->cages.push_back(std::move(cage));
   stats.size_field_quads = asked;
   out->stats.push_back(stats);
