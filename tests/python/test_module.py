@@ -196,3 +196,11 @@ def test_cages_name_their_irregular_vertices_off_singularities(native, tmp_path)
     for v, point in zip(off, listed):
         np.testing.assert_allclose(cage["vertices"][v], point["position"])
         assert valence[v] == point["valence"] != 4
+    # Through fitting and composing (the cage handed on is the pulled one), the indices
+    # still name those vertices.
+    full = native.convert(design, solids, {"tolerance": h})
+    assert full["report"]["composed"]["ok"]
+    (pulled,) = full["cages"]
+    np.testing.assert_array_equal(pulled["irregular_off_singularities"], off)
+    valence = np.bincount(pulled["faces"].ravel(), minlength=len(pulled["vertices"]))
+    assert [valence[v] for v in off] == [point["valence"] for point in listed]
