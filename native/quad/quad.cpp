@@ -1209,7 +1209,9 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       const QuadOptions& o = variants[k].options;
       extract_once(inputs, o, seen, dropped, {}, a);
       const int off = a->stats.irregular_off_singularities;
-      if (o.off_node_price > 0 && off > 0 && off >= o.off_node_share * a->stats.irregular_vertices)
+      if (o.off_node_price > 0 && off > 0 &&
+          (off >= o.off_node_share * a->stats.irregular_vertices ||
+           (o.off_node_count > 0 && off >= o.off_node_count)))
         read_off_nodes_again(inputs, o, dropped, a);
     } catch (...) {
       a->error = std::current_exception();

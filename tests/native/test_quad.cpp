@@ -2433,17 +2433,26 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   EXPECT_LT(again.stats[0].irregular_off_singularities, first.stats[0].irregular_off_singularities);
   EXPECT_TRUE(quad_detail::better_cage(again.stats[0], first.stats[0]));
   // Only where the first reading leaves at least off_node_share of the irregular vertices
-  // away from singularities (here above the default): asked for all of them, nothing is
-  // read again.
-  const double share = static_cast<double>(first.stats[0].irregular_off_singularities) /
-                       first.stats[0].irregular_vertices;
+  // away from singularities (here above the default), or at least off_node_count of them:
+  // asked for all of them and more than it leaves, nothing is read again; asked for as
+  // many as it leaves, whatever their share, it is read again.
+  const int left = first.stats[0].irregular_off_singularities;
+  const double share = static_cast<double>(left) / first.stats[0].irregular_vertices;
   EXPECT_GE(share, options.off_node_share);
   QuadOptions sparing = options;
   sparing.off_node_share = 1;
+  sparing.off_node_count = left + 1;
   const QuadResult spared = extract_cages(r.mesh, r.partition, field, sparing, Context());
   ASSERT_EQ(spared.cages.size(), 1u);
   EXPECT_FALSE(says(spared.notes, "read again"));
   EXPECT_EQ(spared.cages[0].quads, first.cages[0].quads);
+  QuadOptions counted = sparing;
+  counted.off_node_count = left;
+  const QuadResult recounted = extract_cages(r.mesh, r.partition, field, counted, Context());
+  ASSERT_EQ(recounted.cages.size(), 1u);
+  EXPECT_TRUE(says(recounted.notes, "away from singularities priced higher: " +
+                                        std::to_string(left) + " → "));
+  EXPECT_EQ(recounted.cages[0].quads, again.cages[0].quads);
 }
 
 // The density is raised where singularities are dense only as far as the valence targets
