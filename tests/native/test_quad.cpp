@@ -2450,8 +2450,8 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   counted.off_node_count = left;
   const QuadResult recounted = extract_cages(r.mesh, r.partition, field, counted, Context());
   ASSERT_EQ(recounted.cages.size(), 1u);
-  EXPECT_TRUE(says(recounted.notes, "away from singularities priced higher: " +
-                                        std::to_string(left) + " → "));
+  EXPECT_TRUE(says(recounted.notes,
+                   "away from singularities priced higher: " + std::to_string(left) + " → "));
   EXPECT_EQ(recounted.cages[0].quads, again.cages[0].quads);
 }
 
