@@ -179,10 +179,12 @@ struct QuadOptions {
   // docs/quad_method.md. 0: wherever there are any.
   double off_node_share = 0.02;
   // ... and also where it leaves at least this many, whatever their share (0: by share
-  // only). 48 conversions (bench/quad_judge): 64 → 52 left unexplained, oversized 1428 →
-  // 1423, skewed 1382 → 1357, 375 → 423 s; the 50k-triangle region and the fixtures leave
-  // none, so they are not read again.
-  int off_node_count = 3;
+  // only). At 3, 48 conversions (bench/quad_judge) went 64 → 52 left unexplained,
+  // oversized 1428 → 1423, skewed 1382 → 1357, 375 → 424 s, but rendered, the genus-16
+  // net at h 0.11 (4 → 0 there) kept a second cage whose stub at (−0.3, 2.1) has 2–3 quads
+  // across where the first had 6: better_cage weighs unexplained vertices over local
+  // density. Off until it does.
+  int off_node_count = 0;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make
