@@ -236,6 +236,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
                    {"flipped_quads", s.flipped_quads},
                    {"collapsed_quads", s.collapsed_quads},
                    {"oversized_quads", s.oversized_quads},
+                   {"squeezed_arcs", s.squeezed_arcs},
                    {"size_field_quads", s.size_field_quads},
                    {"patches", s.patches},
                    {"method", s.fallback ? "fallback: split coarse remesh, not field-aligned" : "field-aligned patch layout"},

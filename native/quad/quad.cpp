@@ -677,12 +677,14 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
 
 // What every attempt at one component reads, the same for all of them: the (refined)
 // surface the layout is traced on, the checks on the unrefined component, the field's
-// singularities there, and the quads the size field asks for (QuadStats::size_field_quads).
+// singularities there, the quads the size field asks for (QuadStats::size_field_quads), and
+// the density asked before any raise for dense singularities (QuadStats::squeezed_arcs).
 struct ComponentInputs {
   const quad_detail::Surface& surface;
   const quad_detail::CageChecks& checks;
   const std::vector<quad_detail::SingularPoint>& singular;
   double asked;
+  double unraised_density;
 };
 
 // What one reading of a layout gives: its fingerprints, the cage with its statistics and
@@ -849,6 +851,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
     messages->warnings.push_back(text);
   }
   stats->patches = static_cast<int>(patches.patches.size());
+  stats->squeezed_arcs = quad_detail::squeezed_arcs(patches, in.unraised_density);
   stats->separatrices = layout.separatrices;
   stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (layout.dropped_traces)
@@ -980,7 +983,13 @@ constexpr double kEvenDensityMiss = 0.1;  // ~10%
 // follows the size field): arches' second component, whose requested layout has 1.25×
 // once pairs are drawn together, keeps a choice with 0.92×, and a sphere whose density is
 // raised for its singularities the densest of its choices (all under half of what it asks).
-// Irregular vertices away from singularities count first (issue 5 wants none): none
+// Then fewer squeezed arcs (patch rows gutted to half the edges their length asks for or
+// less): on the genus-16 net at h 0.11 a choice with none off had a stub 2-3 quads across
+// (its end an arc of 2 edges where the size field asks 4.1), and was kept for its none off
+// over one with 2 off and the stub 6 across. Over 48 conversions (bench/quad_judge,
+// off_node_count 3) this rule took the kept cages' squeezed arcs 6 → 1 and their irregular
+// vertices off singularities 52 → 57 (oversized quads 1423 → 1409, skewed 1357 → 1344).
+// Irregular vertices away from singularities count next (issue 5 wants none): none
 // against some always wins; otherwise counts within 15% (or 2) of each other are even.
 // Then skewed quads (a corner over 45° off square), counts within 20% (or 5) even: the
 // 3 x 3 net's requested layout (15 off, 4.8°, 35 skewed, rows crumpled at two junctions)
@@ -996,6 +1005,7 @@ bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meet
   const double miss_a = a.size_field_miss(), miss_b = b.size_field_miss();
   if (meets_a && (miss_a == 0) != (miss_b == 0)) return miss_a == 0;
   if (meets_a && std::abs(miss_a - miss_b) > kEvenDensityMiss) return miss_a < miss_b;
+  if (meets_a && a.squeezed_arcs != b.squeezed_arcs) return a.squeezed_arcs < b.squeezed_arcs;
   const int off_a = a.irregular_off_singularities, off_b = b.irregular_off_singularities;
   if (meets_a && off_a != off_b &&
       (std::min(off_a, off_b) == 0 ||
@@ -1022,7 +1032,8 @@ namespace {
 // singularities (comfortably_meets_targets), or until the work budget after the first cage
 // that meets them is spent (QuadOptions::work_after_meeting, min_choices_after_meeting). Kept:
 // among the cages meeting the targets, preferably one that needed no quad collapsed (a collapse
-// leaves a valence-6 vertex whose pulled limit surface can fold), then the fewest irregular
+// leaves a valence-6 vertex whose pulled limit surface can fold), then the density nearest the
+// size field's, then the fewest squeezed arcs, then the fewest irregular
 // vertices away from the field's singularities (counts within 15% or 2 even, unless one is none),
 // then the fewest skewed quads (within 20% or 5 even), then the fewest irregular vertices (counts
 // within 5% of each other are even), then the smallest mean corner deviation (better_cage); if none
@@ -1173,7 +1184,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       1, options.parallel_choices > 0
              ? options.parallel_choices
              : std::min(4, static_cast<int>(std::thread::hardware_concurrency())));
-  const ComponentInputs inputs{surface, checks, singular, asked};
+  const ComponentInputs inputs{surface, checks, singular, asked, options.density};
   struct Attempt : Reading {
     std::exception_ptr error;
     // A cage that meets the targets but for its corner angles is squared before it is

@@ -181,10 +181,11 @@ struct QuadOptions {
   // ... and also where it leaves at least this many, whatever their share (0: by share
   // only). At 3, 48 conversions (bench/quad_judge) went 64 → 52 left unexplained,
   // oversized 1428 → 1423, skewed 1382 → 1357, 375 → 424 s, but rendered, the genus-16
-  // net at h 0.11 (4 → 0 there) kept a second cage whose stub at (−0.3, 2.1) has 2–3 quads
-  // across where the first had 6: better_cage weighs unexplained vertices over local
-  // density. Off until it does.
-  int off_node_count = 0;
+  // net at h 0.11 (4 → 0 there) kept a cage whose stub at (−0.3, 2.1) has 2–3 quads
+  // across where the other choice had 6. With better_cage ranking squeezed arcs
+  // (QuadStats::squeezed_arcs) before unexplained vertices: 64 → 57, oversized 1409,
+  // skewed 1344, and that net keeps the stub 6 across.
+  int off_node_count = 3;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make
@@ -345,6 +346,15 @@ struct QuadStats {
   // Quads with an edge longer than 2.5× the local target edge length (quantization
   // squeezed their patch; quad_detail::oversized_quads).
   int oversized_quads = 0;
+  // Arcs of the quantized layout (patch sides between nodes) that got at most half the
+  // cage edges the size field asks for on them, of those where it asks 3 or more: a row of
+  // patches gutted to make opposite sides equal (the genus-16 net at h 0.11: a stub 2-3
+  // quads across, its end an arc of 2 edges where the size field asks 4.1). Measured
+  // against the size field at QuadOptions::density, not at the density raised for dense
+  // singularities (the nets' 2.2×, under which arcs left at 0 edges to balance are
+  // common). Oversized quads (an edge over 2.5× the raised target) miss it.
+  // quad_detail::squeezed_arcs.
+  int squeezed_arcs = 0;
   // Interior vertices of valence ≠ 4 whose quarter turns no field singularity of the same
   // sign within two local target edges explains (each singularity explains its own index
   // once): irregular vertices the layout put where the field has none

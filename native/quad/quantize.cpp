@@ -347,6 +347,15 @@ bool quantize(PatchLayout& layout, const QuadOptions& options, std::string* fail
   return solve(layout, options, lower, sides_of, failure);
 }
 
+int squeezed_arcs(const PatchLayout& layout, double density) {
+  int squeezed = 0;
+  for (const Arc& arc : layout.arcs) {
+    const double asked = arc.target * density;
+    squeezed += asked >= kSqueezedTarget && arc.count <= kSqueezedShare * asked;
+  }
+  return squeezed;
+}
+
 void release_quantize_thread() { glp_free_env(); }
 
 }  // namespace genbrep::quad_detail

@@ -640,6 +640,22 @@ TEST(Quad, AWidePatchBetweenShortArcsKeepsARow) {
   EXPECT_EQ(layout.arcs[1].count, 0);
 }
 
+// An arc is squeezed when it got at most half the edges the size field asks for on it, of
+// those where it asks 3 or more, at the density given (not the raised one): the
+// genus-16 net at h 0.11's stub end, 2 edges where 4.1 are asked.
+TEST(Quad, AnArcGivenHalfTheEdgesItsLengthAsksForIsSqueezed) {
+  quad_detail::PatchLayout layout;
+  layout.arcs.resize(5);
+  const double targets[] = {4.1, 4.1, 2.5, 1.6, 6};
+  const int counts[] = {2, 3, 0, 1, 2};
+  for (int a = 0; a < 5; ++a) layout.arcs[a].target = targets[a], layout.arcs[a].count = counts[a];
+  EXPECT_EQ(quad_detail::squeezed_arcs(layout, 1.0), 2);  // arcs 0 and 4; 2.5 asks under 3
+  EXPECT_EQ(quad_detail::squeezed_arcs(layout, 2.0), 5);  // 8.2 / 8.2 / 5 / 3.2 / 12 asked
+  EXPECT_EQ(quad_detail::squeezed_arcs(layout, 0.5), 0);  // 2.05 / 3 asked: none under half
+  layout.arcs[4].count = 4;
+  EXPECT_EQ(quad_detail::squeezed_arcs(layout, 1.0), 1);
+}
+
 // Two thin patches between two loop arcs (0 and 4, target 5) share an interior arc (1)
 // and two short interior arcs across (2 and 3, target 0.2) that may get 0 edges: alone
 // they would, and each patch would collapse onto its loop. A patch on a loop keeps an
@@ -702,7 +718,7 @@ TEST(Quad, APatchUnbalancedOnlyByALoopSideIsFoundToMerge) {
 // that starts 0.6 away (beyond the 0.3 join distance) runs on to the barrier, and so does
 // one 0.2 away when joining is off.
 // Among layout choices: meeting the targets wins, then no collapsed quad, then density
-// within 0.8-1.2x of the size field's (or nearer it), then fewer
+// within 0.8-1.2x of the size field's (or nearer it), then fewer squeezed arcs, then fewer
 // irregular vertices away from singularities (within 15% or 2 even, but none wins), then
 // fewer skewed quads (within 20% or 5 even), then fewer irregular vertices, but counts
 // within 5% are even and the smaller corner deviation wins.
@@ -771,6 +787,15 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   other.quads = 400, other.irregular_off_singularities = 0;
   EXPECT_TRUE(quad_detail::better_cage(other, follows));
   EXPECT_FALSE(quad_detail::better_cage(follows, other));
+  // Squeezed arcs after density, before irregular vertices off singularities: the
+  // genus-16 net at h 0.11's choice with none off and a stub gutted to 2-3 quads across
+  // loses to one with 2 off and the stub 6 across.
+  QuadStats gutted = other, full = follows;
+  gutted.squeezed_arcs = 1, full.irregular_off_singularities = 2;
+  EXPECT_TRUE(quad_detail::better_cage(full, gutted));
+  EXPECT_FALSE(quad_detail::better_cage(gutted, full));
+  full.quads = 300;  // 0.67x: density first
+  EXPECT_TRUE(quad_detail::better_cage(gutted, full));
 }
 
 // A layout on an n × n FlatGrid: a barrier curve along column 30 (x = 3 at spacing 0.1)

@@ -335,6 +335,12 @@ PatchLayout build_patches(const Surface& s, Layout& layout, const QuadOptions& o
 // options.quantize_seconds (at least 1 s) as a last resort.
 bool quantize(PatchLayout& patches, const QuadOptions& options, std::string* failure,
               bool* relaxed);
+// The arcs with at most kSqueezedShare of the cage edges the size field asks for on them
+// at `density` (Arc::target × density; the caller's, before any raise for dense
+// singularities), among those where it asks kSqueezedTarget or more
+// (QuadStats::squeezed_arcs).
+constexpr double kSqueezedShare = 0.5, kSqueezedTarget = 3.0;
+int squeezed_arcs(const PatchLayout& patches, double density);
 // Frees the calling thread's integer-programming state (GLPK keeps one per thread); for
 // threads that ran quantize and end.
 void release_quantize_thread();
