@@ -184,7 +184,8 @@ struct QuadOptions {
   // net at h 0.11 (4 → 0 there) kept a cage whose stub at (−0.3, 2.1) has 2–3 quads
   // across where the other choice had 6. With better_cage ranking squeezed arcs
   // (QuadStats::squeezed_arcs) before unexplained vertices: 64 → 57, oversized 1409,
-  // skewed 1344, and that net keeps the stub 6 across.
+  // skewed 1344, and that net keeps the stub 6 across; with a second reading kept only
+  // where it leaves fewer (read_off_nodes_again): 54, 1398, 1311.
   int off_node_count = 3;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node

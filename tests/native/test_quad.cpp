@@ -796,6 +796,17 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   EXPECT_FALSE(quad_detail::better_cage(gutted, full));
   full.quads = 300;  // 0.67x: density first
   EXPECT_TRUE(quad_detail::better_cage(gutted, full));
+  // A second reading is kept only where it leaves fewer off singularities: the genus-36
+  // net at h 0.14's went 4 → 6 off and was kept for the one quad the first had collapsed.
+  QuadStats first = clean, second = clean;
+  first.irregular_off_singularities = 4, first.collapsed_quads = 1;
+  second.irregular_off_singularities = 6;
+  EXPECT_TRUE(quad_detail::better_cage(second, first));
+  EXPECT_FALSE(quad_detail::better_second_reading(second, first));
+  second.irregular_off_singularities = 3;
+  EXPECT_TRUE(quad_detail::better_second_reading(second, first));
+  first.collapsed_quads = 0, second.collapsed_quads = 1;  // fewer, but not the better cage
+  EXPECT_FALSE(quad_detail::better_second_reading(second, first));
 }
 
 // A layout on an n × n FlatGrid: a barrier curve along column 30 (x = 3 at spacing 0.1)

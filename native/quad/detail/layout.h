@@ -633,12 +633,15 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
                   const Dropped& dropped = Dropped());
 
 // Whether cage a is to be kept rather than cage b among a component's layout choices:
-// meeting issue 5's targets, then no collapsed quad, then (both meeting) fewer irregular
-// vertices unless the counts are within 5% of each other, then the smaller mean corner
-// deviation (quad.cpp).
+// meeting issue 5's targets, then no collapsed quad, then (both meeting) density, squeezed
+// arcs, irregular vertices off singularities, skewed quads, irregular vertices, each with
+// its margin, then the smaller mean corner deviation (quad.cpp).
 bool better_cage(const QuadStats& a, const QuadStats& b);
 // The same with whether each meets the targets given (judged on its squared angles).
 bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b);
+// Whether a layout's second reading (QuadOptions::off_node_price) is kept over its first:
+// fewer irregular vertices off singularities, and better_cage.
+bool better_second_reading(const QuadStats& second, const QuadStats& first);
 
 // The angle at `at` between the edges to a and b, in radians (measure_cage, the untangle,
 // the squaring).
