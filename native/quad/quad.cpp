@@ -999,15 +999,6 @@ constexpr double kEvenDensityMiss = 0.1;  // ~10%
 bool better_cage(const QuadStats& a, const QuadStats& b) {
   return better_cage(a, meets_targets(a), b, meets_targets(b));
 }
-// A second reading is kept only if it leaves fewer irregular vertices off singularities
-// (what it is for) and is the better cage: the genus-36 net at h 0.14 kept one that went
-// 4 → 6 off for the one quad the first had collapsed, with a valence 7 and two 3s crowded
-// at a hole corner. Over 48 conversions (bench/quad_judge) requiring fewer took 57 → 54
-// off singularities, oversized quads 1409 → 1398, skewed 1344 → 1311.
-bool better_second_reading(const QuadStats& second, const QuadStats& first) {
-  return second.irregular_off_singularities < first.irregular_off_singularities &&
-         better_cage(second, first);
-}
 bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b) {
   if (meets_a != meets_b) return meets_a;
   if ((a.collapsed_quads > 0) != (b.collapsed_quads > 0)) return a.collapsed_quads == 0;
@@ -1027,6 +1018,16 @@ bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meet
                      0.05 * std::max(a.irregular_vertices, b.irregular_vertices))
     return a.irregular_vertices < b.irregular_vertices;
   return a.mean_angle_deviation_deg < b.mean_angle_deviation_deg;
+}
+
+// A second reading is kept only if it leaves fewer irregular vertices off singularities
+// (what it is for) and is the better cage: the genus-36 net at h 0.14 kept one that went
+// 4 → 6 off for the one quad the first had collapsed, with a valence 7 and two 3s crowded
+// at a hole corner. Over 48 conversions (bench/quad_judge) requiring fewer took 57 → 54
+// off singularities, oversized quads 1409 → 1398, skewed 1344 → 1311.
+bool better_second_reading(const QuadStats& second, const QuadStats& first) {
+  return second.irregular_off_singularities < first.irregular_off_singularities &&
+         better_cage(second, first);
 }
 }  // namespace quad_detail
 
