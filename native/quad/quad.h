@@ -185,8 +185,10 @@ struct QuadOptions {
   // across where the other choice had 6. With better_cage ranking squeezed arcs
   // (QuadStats::squeezed_arcs) before unexplained vertices: 64 → 57, oversized 1409,
   // skewed 1344, and that net keeps the stub 6 across; with a second reading kept only
-  // where it leaves fewer (read_off_nodes_again): 54, 1398, 1311.
-  int off_node_count = 3;
+  // where it leaves fewer (read_off_nodes_again): 54, 1398, 1311, 430 s; from 2 instead of
+  // 3: 49, 1401, 1289, 473 s (the 4 x 4 net at h 0.1 reads its hole corner again and
+  // leaves none: a valence 7 and a 3 there before).
+  int off_node_count = 2;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make
