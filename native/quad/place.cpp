@@ -5,10 +5,12 @@
 // rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
 // the window's connectivity alone (the first edit changing an irregular vertex, the
 // second one of the vertices the first changed), and where none helps every sequence of
-// three whose first two leave no more unexplained; of those leaving fewer unexplained
-// vertices, the best few (fewest unexplained, then fewest irregular) are evened out in
-// turn around their changed vertices, and the first whose quads come out neither
-// squeezed nor turned over is made. Such defects are a −1 singularity drawn as a 6 and a
+// three whose first two leave no more unexplained, and then (up to max_edits) one edit
+// more at a time after the kDeepPrefixes best sequences so far that leave no more
+// unexplained (a 6 and a 3 beside a −1 singularity can need four); of those leaving
+// fewer unexplained vertices, the best few (fewest unexplained, then fewest irregular) are
+// evened out in turn around their changed vertices, and the first whose quads come out
+// neither squeezed nor turned over is made. Such defects are a −1 singularity drawn as a 6 and a
 // 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one edge off);
 // one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of the cage
 // found 2 of 49 with one edit, 25 with two; the three-edit search took the cage's 18
@@ -19,8 +21,9 @@
 // later rounds cancel them once they meet. The caller opens squeezed quads and evens the
 // whole cage out.
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
-// two edits do not help (pruned: the second must not add unexplained vertices); windows
-// searched in vain are not searched again until an edit touches them.
+// two edits do not help (pruned: the second must not add unexplained vertices), and
+// kDeepPrefixes × (edits in the window) more per edit beyond three; windows searched in
+// vain are not searched again until an edit touches them.
 #include <algorithm>
 #include <array>
 #include <map>
@@ -44,6 +47,9 @@ constexpr int kMaxSplitValence = 8;
 constexpr double kMinPlacedCorner = 5.0;
 // Improving sequences kept per window, tried best first until one settles.
 constexpr size_t kKeptSequences = 6;
+// Sequences of three edits or more taken on by one more where none helps (the best by
+// Score among those leaving no more unexplained vertices; place_irregulars' max_edits).
+constexpr size_t kDeepPrefixes = 64;
 // Sweeps evening out an edit's vertices and their neighbours (settle).
 constexpr int kSettleSweeps = 3;
 // Drawing pairs together (place_irregulars' draw_pairs_together): a sequence leaving as many
@@ -331,6 +337,16 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
           static_cast<int>(irregular.size()), apart};
 }
 
+// Puts `s` into `best` (sorted by score, best first) if it is among the `limit` best.
+void keep_best(std::vector<std::pair<Score, State>>& best, const Score& now, const State& s,
+               size_t limit) {
+  if (best.size() == limit && !(now < best.back().first)) return;
+  const auto at = std::upper_bound(best.begin(), best.end(), now,
+                                   [](const auto& x, const auto& y) { return x < y.first; });
+  best.insert(at, {now, s});
+  if (best.size() > limit) best.pop_back();
+}
+
 // Evens out the changed vertices of `s` and their neighbours (kSettleSweeps sweeps: each
 // to the mean of its neighbours, onto the component) and tells whether the quads around
 // them are then neither squeezed (a corner under kMinPlacedCorner) nor turned over.
@@ -370,7 +386,7 @@ bool settle(const CageChecks& checks, State& s, std::vector<int>* moved) {
 
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     bool draw_pairs_together, const Dropped& dropped) {
+                     bool draw_pairs_together, int max_edits, const Dropped& dropped) {
   int total = 0;
   // Vertices whose window was searched in vain and has not changed since: not again.
   std::vector<char> vain(cage.vertices.rows(), 0);
@@ -475,11 +491,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
             (off == off_before &&
              !(irregular_now <= irregular_before && apart < apart_before - kPairCloser)))
           return;
-        if (kept.size() == kKeptSequences && !(now < kept.back().first)) return;
-        const auto at = std::upper_bound(kept.begin(), kept.end(), now,
-                                         [](const auto& x, const auto& y) { return x < y.first; });
-        kept.insert(at, {now, s});
-        if (kept.size() > kKeptSequences) kept.pop_back();
+        keep_best(kept, now, s, kKeptSequences);
       };
       std::vector<char> focus(s.valence.size(), 0);
       for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
@@ -508,16 +520,39 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       });
       // Sequences that only draw a pair together do not spare the three-edit search (when
       // they did, the 25 nets had 276 unexplained vertices instead of 245).
-      const bool fewer = std::any_of(kept.begin(), kept.end(), [&](const auto& k) {
-        return std::get<0>(k.first) < std::get<0>(before);
-      });
-      if (!fewer)
+      auto fewer = [&] {
+        return std::any_of(kept.begin(), kept.end(), [&](const auto& k) {
+          return std::get<0>(k.first) < std::get<0>(before);
+        });
+      };
+      // A sequence of three edits or more is kept if it helps, and it is among the
+      // kDeepPrefixes best to take on by one more edit (where max_edits allows) if it
+      // leaves no more unexplained than before.
+      auto keep_prefix = [&](std::vector<std::pair<Score, State>>& prefixes) {
+        const Score now = score_now();
+        keep(now);
+        if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before))
+          keep_best(prefixes, now, s, kDeepPrefixes);
+      };
+      std::vector<std::pair<Score, State>> prefixes;
+      if (max_edits >= 3 && !fewer())
         first_edit([&] {
           next_edit([&] {
             if (std::get<0>(score_now()) <= std::get<0>(before))
-              next_edit([&] { keep(score_now()); });
+              next_edit([&] { keep_prefix(prefixes); });
           });
         });
+      // Where those do not help either, one edit more at a time after each of the
+      // prefixes, up to max_edits.
+      for (int edits = 4; edits <= max_edits && !fewer() && !prefixes.empty(); ++edits) {
+        std::vector<std::pair<Score, State>> longer;
+        for (auto& prefix : prefixes) {
+          std::swap(s, prefix.second);
+          next_edit([&] { keep_prefix(longer); });
+          std::swap(s, prefix.second);
+        }
+        prefixes = std::move(longer);
+      }
       // The first whose quads, evened out around the changed vertices, are not squeezed or
       // turned over.
       State* chosen = nullptr;

@@ -386,7 +386,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
                             const std::vector<quad_detail::SingularPoint>* singular = nullptr,
-                            double density = 1, bool draw_pairs_together = false) {
+                            double density = 1, bool draw_pairs_together = false,
+                            int place_edits = 3) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
@@ -430,9 +431,9 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // edits; kept if the cage stays valid with fewer such vertices.
   if (singular) {
     QuadCage placed = *cage;
-    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density,
-                                                          kPlaceRounds, draw_pairs_together,
-                                                          dropped)) {
+    if (const int windows =
+            quad_detail::place_irregulars(checks, placed, *singular, density, kPlaceRounds,
+                                          draw_pairs_together, place_edits, dropped)) {
       const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
       const int left = quad_detail::open_squeezed(checks, placed, 24);
       const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
@@ -809,7 +810,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
                                       " doublets (interior vertices of two quads) removed");
     *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped,
                                options.place_irregulars ? &singular : nullptr, options.density,
-                               options.draw_pairs_together);
+                               options.draw_pairs_together, options.place_edits);
     std::set<int> tangled;  // the patches the quads left turned over came from
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);

@@ -138,6 +138,15 @@ struct QuadOptions {
   // later round. 25 nets (genus 9-49, h 0.1-0.14): 297 → 245 irregular vertices off
   // singularities, oversized / skewed quads 2070 / 2124 → 2059 / 2111; genus 64 181 → 165.
   bool draw_pairs_together = true;
+  // The longest sequence of edits place_irregulars tries around one unexplained vertex:
+  // every sequence of one or two, of three where those do not help (the first two leaving
+  // no more unexplained), and from four on, one edit more at a time after the 64 best
+  // sequences so far leaving no more unexplained. A 6 and a 3 beside a −1 singularity
+  // (the 4 x 4 net at h 0.13) need four. 48 conversions (bench/quad_judge; unexplained /
+  // oversized / skewed / s): 3: 49 / 1401 / 1289 / 467; 4: 40 / 1413 / 1301 / 450;
+  // 5: 34 / 1406 / 1293 / 466; 8: 33 / 1405 / 1287 / 443 (every sequence of four instead
+  // of the best 64 taken on: 38 / 1449 / 1352 / 677, genus 64 at h 0.14 alone 37 → 213 s).
+  int place_edits = 8;
   // A curve that ends at a singular vertex within this fraction of the separatrix spacing
   // of a direction no curve leaves it along yet (measured over a target edge length back
   // along the curve) takes that direction, so the singularity's own separatrix is not

@@ -1718,6 +1718,28 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
   EXPECT_LE(stats[3].skewed_quads, stats[2].skewed_quads);
 }
 
+// On the 4 x 4 net at h 0.13 the requested layout leaves a 6 and a 3 beside a −1
+// singularity that no sequence of three edits mends; taking the best sequences of three on
+// by one more edit at a time (place_edits) leaves fewer irregular vertices off singularities,
+// the cage valid and within the targets.
+TEST(Quad, LongerSequencesOfEditsPlaceWhatThreeCannot) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.13, 4)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  int off[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const int edits = k == 0 ? 3 : QuadOptions{}.place_edits;
+    const QuadResult result = requested_net4_cage(
+        r, field, [&](QuadOptions& o) { o.place_edits = edits; },
+        "net 4x4 at h 0.13, sequences of " + std::to_string(edits) + " edits");
+    ASSERT_EQ(result.stats.size(), 1u);
+    off[k] = result.stats[0].irregular_off_singularities;
+    expect_off_singularities_listed(result);
+  }
+  EXPECT_GT(QuadOptions{}.place_edits, 3);
+  EXPECT_GE(off[0], 1);
+  EXPECT_LT(off[1], off[0]);
+}
+
 TEST(Quad, AJoinsJogIsReadAsAStraightStep) {
   const int n = 41;
   const FlatGrid flat(n, 0.1);

@@ -570,7 +570,8 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
                            const Dropped& dropped = Dropped());
 // Moves irregular vertices no singularity explains (irregular_off_singularities) onto the
 // singularities beside them, or cancels them (place.cpp): around each, sequences of up to
-// two edits (three where two do not help) — edge rotation, diagonal collapse, split of a
+// two edits (three where two do not help, then one more at a time after the best of those
+// up to `max_edits`) — edge rotation, diagonal collapse, split of a
 // vertex of 5–8 quads; none at a chain or crease vertex — are scored on the window's
 // connectivity (fewest unexplained vertices, then fewest irregular); of those leaving
 // fewer unexplained, the best few are evened out around their changed vertices in turn
@@ -582,7 +583,8 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
 // squeezed quads and checks the cage. Returns the windows edited (0: the cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     bool draw_pairs_together = false, const Dropped& dropped = Dropped());
+                     bool draw_pairs_together = false, int max_edits = 3,
+                     const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
