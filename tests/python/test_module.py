@@ -183,9 +183,9 @@ def test_recompose_from_the_converted_cages(native, scenes):
 
 def test_cages_name_their_irregular_vertices_off_singularities(native, tmp_path):
     # The 5 x 5 net at h 0.12 is a scene whose cage keeps such vertices (two at a hole
-    # corner, bench/quad_sweep, with every layout choice and however many edits place
-    # them); the 4 x 4 net at h 0.13 keeps none since sequences of more than three edits
-    # place them, nor at h 0.1 since layouts leaving 2 are read again; the fixtures keep none.
+    # corner, bench/quad_sweep, with sequences of 3 to 8 edits placing them); the 4 x 4 net
+    # at h 0.13 keeps none since sequences of more than three edits place them, nor at
+    # h 0.1 since layouts leaving 2 are read again; the fixtures keep none.
     subprocess.run([str(BUILD / "bin" / "make_scenes"), str(tmp_path), "0.12", "net", "5"], check=True)
     design, solids, (origin, h), _ = load_scene(native, tmp_path / "net")
     result = native.convert(design, solids, {"tolerance": h, "until": "quad"})
