@@ -381,13 +381,14 @@ bool cage_is_manifold(const QuadCage& cage, std::string* why);
 
 // Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
 // reported. A valid cage is then evened out (relax_cage: 10 sweeps, half steps), kept if
-// it stays valid and its corners come closer to 90°.
+// it stays valid and its corners come closer to 90°. With `singular`, irregular vertices
+// none of them explains are placed first, as `options` says (density, draw_pairs_together,
+// place_edits).
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
-                            const std::vector<quad_detail::SingularPoint>* singular = nullptr,
-                            double density = 1, bool draw_pairs_together = false,
-                            int place_edits = 3) {
+                            const QuadOptions& options,
+                            const std::vector<quad_detail::SingularPoint>* singular = nullptr) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
@@ -430,10 +431,11 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   // drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by local
   // edits; kept if the cage stays valid with fewer such vertices.
   if (singular) {
+    const double density = options.density;
     QuadCage placed = *cage;
-    if (const int windows =
-            quad_detail::place_irregulars(checks, placed, *singular, density, kPlaceRounds,
-                                          draw_pairs_together, place_edits, dropped)) {
+    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density,
+                                                          kPlaceRounds, options.draw_pairs_together,
+                                                          options.place_edits, dropped)) {
       const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
       const int left = quad_detail::open_squeezed(checks, placed, 24);
       const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
@@ -808,9 +810,8 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
       filled_messages.notes.push_back("component " + std::to_string(c) + ": " +
                                       std::to_string(doublets) +
                                       " doublets (interior vertices of two quads) removed");
-    *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped,
-                               options.place_irregulars ? &singular : nullptr, options.density,
-                               options.draw_pairs_together, options.place_edits);
+    *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped, options,
+                               options.place_irregulars ? &singular : nullptr);
     std::set<int> tangled;  // the patches the quads left turned over came from
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);
@@ -1417,7 +1418,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   for (double factor : {2.0, 1.5, 1.0, 0.75}) {
     cage = quad_detail::fallback_cage(coarse, factor * size);
     untangled = {};
-    stats = measure_untangled(surface, checks, &cage, &untangled, quad_detail::Dropped());
+    stats = measure_untangled(surface, checks, &cage, &untangled, quad_detail::Dropped(), options);
     scale = factor;
     std::string why;
     valid = !stats.flipped_quads && !stats.degenerate_quads && cage_is_manifold(cage, &why);
