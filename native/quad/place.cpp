@@ -10,16 +10,16 @@
 // unexplained (a 6 and a 3 beside a −1 singularity can need four); of those leaving
 // fewer unexplained vertices, the best few (fewest unexplained, then fewest irregular) are
 // evened out in turn around their changed vertices, and the first whose quads come out
-// neither squeezed nor turned over is made. Such defects are a −1 singularity drawn as a 6 and a
-// 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one edge off);
-// one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of the cage
-// found 2 of 49 with one edit, 25 with two; the three-edit search took the cage's 18
-// left to 14). A 3 and a 5 the layout left a few edges apart, away from any singularity
-// (rows shifting by one where a sliver or cusp collapsed), need more edits than that:
-// sequences leaving as many unexplained and no more irregular vertices that draw them
-// nearer each other are ranked too, after those leaving fewer (draw_pairs_together), and
-// later rounds cancel them once they meet. The caller opens squeezed quads and evens the
-// whole cage out.
+// neither squeezed nor turned over is made. Such defects are a −1 singularity drawn as a
+// 6 and a 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one
+// edge off); one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of
+// the cage found 2 of 49 with one edit, 25 with two; the three-edit search took the
+// cage's 18 left to 14). A 3 and a 5 the layout left a few edges apart, away from any
+// singularity (rows shifting by one where a sliver or cusp collapsed), need more edits
+// than that: sequences leaving as many unexplained and no more irregular vertices that
+// draw them nearer each other are ranked too, after those leaving fewer
+// (draw_pairs_together), and later rounds cancel them once they meet. The caller opens
+// squeezed quads and evens the whole cage out.
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
 // two edits do not help (pruned: the second must not add unexplained vertices), and
 // kDeepPrefixes × (edits in the window) more per edit beyond three; windows searched in
