@@ -147,6 +147,12 @@ struct QuadOptions {
   // 5: 34 / 1406 / 1293 / 466; 8: 33 / 1405 / 1287 / 443 (every sequence of four instead
   // of the best 64 taken on: 38 / 1449 / 1352 / 677, genus 64 at h 0.14 alone 37 → 213 s).
   int place_edits = 8;
+  // The evening out that ends each reading (after those edits) holds an irregular vertex
+  // a singularity explained before it and none explains after (moved past its reach, or
+  // its singularity matched to a neighbour drawn nearer) where it was, and evens out the
+  // rest again. 48 conversions (bench/quad_judge; unexplained / oversized / skewed / s,
+  // counted before squaring): off 33 / 1405 / 1287 / 443, on 31 / 1392 / 1286 / 456.
+  bool hold_explained = true;
   // A curve that ends at a singular vertex within this fraction of the separatrix spacing
   // of a direction no curve leaves it along yet (measured over a target edge length back
   // along the curve) takes that direction, so the singularity's own separatrix is not

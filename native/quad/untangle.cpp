@@ -220,7 +220,7 @@ int remove_doublets(QuadCage& cage) {
 }
 
 int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step,
-               const Dropped& dropped) {
+               const Dropped& dropped, const std::vector<char>* held) {
   const ComponentLocator& locator = checks.locator;
   const DesignNormals& normals = checks.normals;
   const int nv = static_cast<int>(cage.vertices.rows());
@@ -235,7 +235,7 @@ int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step
     dropped.check();
     moved = 0;
     for (int v = 0; v < nv; ++v) {
-      if (fixed[v] || neighbours[v].empty()) continue;
+      if (fixed[v] || neighbours[v].empty() || (held && (*held)[v])) continue;
       const Vec3 old = cage.vertices.row(v).transpose();
       Vec3 normal;
       const Vec3 at = locator.closest(old, &normal, &hint[v]);

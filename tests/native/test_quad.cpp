@@ -1307,6 +1307,38 @@ TEST(Quad, SquaringOpensShearedQuadsAndKeepsChainsAndIrregularVertices) {
     EXPECT_TRUE(rotated_squared.vertices.row(v) == rotated.vertices.row(v));
 }
 
+// Evening out with vertices held: on the regular 7 × 7 flat cage with two inner vertices
+// pushed off their grid points, the one held stays exactly where it was pushed, the other
+// moves back towards its grid point; without holding, both do. No quad turns over, the
+// chain does not move.
+TEST(Quad, EveningOutLeavesHeldVerticesWhereTheyAre) {
+  const FlatChecks square(31, 0.2);  // the square [0, 6]²
+  const quad_detail::CageChecks& checks = square.checks;
+  const int m = 7, held_vertex = 3 * m + 3, free_vertex = 2 * m + 2;
+  QuadCage pushed = regular_flat_cage(m);
+  for (int v : {held_vertex, free_vertex})
+    pushed.vertices.row(v) += Eigen::RowVector3d(0.3, 0.2, 0);
+  ASSERT_EQ(bad_flat_quads(pushed), 0);
+  const QuadCage grid = regular_flat_cage(m);
+  auto off_grid = [&](const QuadCage& cage, int v) {
+    return (cage.vertices.row(v) - grid.vertices.row(v)).norm();
+  };
+  std::vector<char> held(pushed.vertices.rows(), 0);
+  held[held_vertex] = 1;
+  QuadCage holding = pushed, free = pushed;
+  EXPECT_GT(quad_detail::relax_cage(checks, holding, 10, 0.5, quad_detail::Dropped(), &held), 0);
+  EXPECT_GT(quad_detail::relax_cage(checks, free, 10, 0.5), 0);
+  EXPECT_TRUE(holding.vertices.row(held_vertex) == pushed.vertices.row(held_vertex));
+  EXPECT_LT(off_grid(holding, free_vertex), 0.5 * off_grid(pushed, free_vertex));
+  for (int v : {held_vertex, free_vertex})
+    EXPECT_LT(off_grid(free, v), 0.5 * off_grid(pushed, v)) << v;
+  for (const QuadCage* cage : {&holding, &free}) {
+    EXPECT_EQ(bad_flat_quads(*cage), 0);
+    for (int v : cage->boundary_chains[0])
+      EXPECT_TRUE(cage->vertices.row(v) == grid.vertices.row(v));
+  }
+}
+
 // Quads stretched beyond 2.5× the local target edge length are counted: on a flat grid of
 // target size 1, a regular cage of unit quads has none; stretching its last column to
 // 3 units makes that column's 6 quads oversized, and at density 0.5 (target 2) none are.
@@ -1739,6 +1771,32 @@ TEST(Quad, LongerSequencesOfEditsPlaceWhatThreeCannot) {
     expect_off_singularities_listed(result);
   }
   EXPECT_GT(QuadOptions{}.place_edits, 3);
+  EXPECT_GE(off[0], 1);
+  EXPECT_LT(off[1], off[0]);
+}
+
+// On the net of genus 16 at h 0.11, the requested layout's evening out moves an irregular
+// vertex the edits left explained past its singularity's reach; held where it was, the
+// cage keeps it explained (1 → 0 irregular vertices off singularities), and the notes say
+// how many were held.
+TEST(Quad, EveningOutHoldsIrregularVerticesItsSingularitiesExplain) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.11, 4)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  int off[2] = {0, 0};
+  for (const bool hold : {false, true}) {
+    const QuadResult result = requested_net4_cage(
+        r, field, [&](QuadOptions& o) { o.hold_explained = hold; },
+        hold ? "net 4x4 at h 0.11, explained vertices held" : "net 4x4 at h 0.11, none held");
+    ASSERT_EQ(result.stats.size(), 1u);
+    off[hold] = result.stats[0].irregular_off_singularities;
+    expect_off_singularities_listed(result);
+    const bool noted =
+        std::any_of(result.notes.begin(), result.notes.end(), [](const std::string& n) {
+          return n.find("held where singularities explain them") != std::string::npos;
+        });
+    EXPECT_EQ(noted, hold);
+  }
+  EXPECT_TRUE(QuadOptions{}.hold_explained);
   EXPECT_GE(off[0], 1);
   EXPECT_LT(off[1], off[0]);
 }
@@ -2465,15 +2523,17 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
 // 3 × 3 net at h = 0.1 the second reading leaves fewer of them, and the notes say so;
 // the first reading alone (off_node_price 0) leaves some and reads nothing again, and so
 // does a run that reads again only above a larger share of them (off_node_share). All at
-// the density raise of when this was measured (vertices_per_singular_quarter 50) and
-// without kink nodes (QuadOptions::kink_nodes): at today's 35, or with kink nodes, the
-// first reading there leaves none, and nothing is read again.
+// the density raise of when this was measured (vertices_per_singular_quarter 50),
+// without kink nodes (QuadOptions::kink_nodes) and without holding explained vertices
+// (hold_explained): at today's 35, or with kink nodes, the first reading there leaves
+// none, and nothing is read again; holding, both readings leave 5.
 TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   QuadOptions options;
   options.vertices_per_singular_quarter = 50;
   options.kink_nodes = false;
+  options.hold_explained = false;
   QuadOptions once = options;
   once.off_node_price = 0;
   const QuadResult first = extract_cages(r.mesh, r.partition, field, once, Context());

@@ -600,12 +600,12 @@ int rotate_edges_for_pairs(const CageChecks& checks, QuadCage& cage);
 // component; a split whose quads come out squeezed or turned over is undone; none
 // touches another's vertices; p, q not on chains or already joined. Returns the splits.
 int split_vertices_for_pairs(const CageChecks& checks, QuadCage& cage);
-// Evens out a valid cage: for `sweeps` sweeps every free vertex moves `step` of the way to
-// the mean of its neighbours, in its tangent plane and back onto the component; a move
-// that would make one of its quads squeezed or turned over is undone. Returns the vertices
-// moved in the last sweep.
+// Evens out a valid cage: for `sweeps` sweeps every free vertex (not on a chain, not
+// `held`) moves `step` of the way to the mean of its neighbours, in its tangent plane and
+// back onto the component; a move that would make one of its quads squeezed or turned over
+// is undone. Returns the vertices moved in the last sweep.
 int relax_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double step,
-               const Dropped& dropped = Dropped());
+               const Dropped& dropped = Dropped(), const std::vector<char>* held = nullptr);
 // Squares a valid cage's quads: for `sweeps` sweeps every free vertex takes a gradient
 // step (in its tangent plane, back onto the component) on the squared deviations of the
 // corners it moves (its own and its neighbours' in its quads) from their ideal angles
