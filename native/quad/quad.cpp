@@ -423,11 +423,81 @@ QuadCage evened_out(const quad_detail::CageChecks& checks, const QuadCage& cage,
   return relaxed;
 }
 
+// Irregular vertices beside a singularity of `singular` that does not explain them (a −1
+// singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by
+// local edits (place_irregulars, as `options` says: density, draw_pairs_together,
+// place_edits); kept in *cage and *stats if the cage stays valid with fewer such vertices.
+void place_onto_singularities(const quad_detail::Surface& surface,
+                              const quad_detail::CageChecks& checks, QuadCage* cage,
+                              QuadStats* stats, quad_detail::Messages* messages,
+                              const quad_detail::Dropped& dropped, const QuadOptions& options,
+                              const std::vector<quad_detail::SingularPoint>& singular) {
+  const double density = options.density;
+  QuadCage placed = *cage;
+  const int windows =
+      quad_detail::place_irregulars(checks, placed, singular, density, kPlaceRounds,
+                                    options.draw_pairs_together, options.place_edits, dropped);
+  if (!windows) return;
+  const int off = quad_detail::irregular_off_singularities(checks, *cage, singular, density);
+  const int left = quad_detail::open_squeezed(checks, placed, 24);
+  const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
+  const int placed_off =
+      quad_detail::irregular_off_singularities(checks, placed, singular, density);
+  std::string why;
+  if (!left && !placed_stats.flipped_quads && !placed_stats.degenerate_quads && placed_off < off &&
+      cage_is_manifold(placed, &why)) {
+    messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
+                              std::to_string(windows) +
+                              " local edits moved irregular vertices onto the singularities "
+                              "beside them (away from singularities " +
+                              std::to_string(off) + " → " + std::to_string(placed_off) + ")");
+    const int folded = stats->collapsed_quads;
+    *cage = std::move(placed);
+    *stats = placed_stats;
+    stats->collapsed_quads = folded;
+  } else {
+    messages->notes.push_back(
+        "component " + std::to_string(surface.component) + ": " + std::to_string(windows) +
+        " local edits onto singularities not kept (" +
+        (left ? std::to_string(left) + " quads left squeezed or turned over"
+         : placed_stats.flipped_quads || placed_stats.degenerate_quads
+             ? std::to_string(placed_stats.flipped_quads + placed_stats.degenerate_quads) +
+                   " quads flipped or degenerate"
+         : placed_off >= off ? "no fewer irregular vertices away from singularities"
+                             : "not a valid 2-manifold: " + why) +
+        ")");
+  }
+}
+
+// The cage evened out (evened_out, holding what `singular` explains if
+// QuadOptions::hold_explained), kept in *cage and *stats if it stays valid and its corners
+// come closer to 90°.
+void even_out_kept(const quad_detail::Surface& surface, const quad_detail::CageChecks& checks,
+                   QuadCage* cage, QuadStats* stats, quad_detail::Messages* messages,
+                   const quad_detail::Dropped& dropped, const QuadOptions& options,
+                   const std::vector<quad_detail::SingularPoint>* singular) {
+  int held = 0;
+  QuadCage relaxed = evened_out(checks, *cage, dropped, options.hold_explained ? singular : nullptr,
+                                options.density, &held);
+  QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks);
+  if (relaxed_stats.flipped_quads || relaxed_stats.degenerate_quads ||
+      relaxed_stats.mean_angle_deviation_deg >= stats->mean_angle_deviation_deg)
+    return;
+  if (held)
+    messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
+                              std::to_string(held) +
+                              " irregular vertices held where singularities explain them while "
+                              "the cage was evened out");
+  relaxed_stats.collapsed_quads = stats->collapsed_quads;
+  *cage = std::move(relaxed);
+  *stats = relaxed_stats;
+}
+
 // Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
-// reported. A valid cage is then evened out (evened_out), kept if it stays valid and its
-// corners come closer to 90°. With `singular`, irregular vertices none of them explains
-// are placed first, and those they explain are held in the evening out, as `options` says
-// (density, draw_pairs_together, place_edits, hold_explained).
+// reported. A valid cage is then evened out (even_out_kept). With `singular`, irregular
+// vertices none of them explains are placed first (place_onto_singularities), and those
+// they explain are held in the evening out; where some are still unexplained after it, both
+// run again, up to QuadOptions::place_passes times.
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
@@ -471,59 +541,14 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
       stats.collapsed_quads = folded;
     }
   }
-  // Irregular vertices beside a singularity that does not explain them (a −1 singularity
-  // drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by local
-  // edits; kept if the cage stays valid with fewer such vertices.
-  if (singular) {
-    const double density = options.density;
-    QuadCage placed = *cage;
-    if (const int windows = quad_detail::place_irregulars(checks, placed, *singular, density,
-                                                          kPlaceRounds, options.draw_pairs_together,
-                                                          options.place_edits, dropped)) {
-      const int off = quad_detail::irregular_off_singularities(checks, *cage, *singular, density);
-      const int left = quad_detail::open_squeezed(checks, placed, 24);
-      const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
-      const int placed_off = quad_detail::irregular_off_singularities(checks, placed, *singular, density);
-      std::string why;
-      if (!left && !placed_stats.flipped_quads && !placed_stats.degenerate_quads &&
-          placed_off < off && cage_is_manifold(placed, &why)) {
-        messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
-                                  std::to_string(windows) +
-                                  " local edits moved irregular vertices onto the singularities "
-                                  "beside them (away from singularities " + std::to_string(off) +
-                                  " → " + std::to_string(placed_off) + ")");
-        const int folded = stats.collapsed_quads;
-        *cage = std::move(placed);
-        stats = placed_stats;
-        stats.collapsed_quads = folded;
-      } else {
-        messages->notes.push_back(
-            "component " + std::to_string(surface.component) + ": " + std::to_string(windows) +
-            " local edits onto singularities not kept (" +
-            (left ? std::to_string(left) + " quads left squeezed or turned over"
-             : placed_stats.flipped_quads || placed_stats.degenerate_quads
-                 ? std::to_string(placed_stats.flipped_quads + placed_stats.degenerate_quads) +
-                       " quads flipped or degenerate"
-             : placed_off >= off ? "no fewer irregular vertices away from singularities"
-                                 : "not a valid 2-manifold: " + why) +
-            ")");
-      }
-    }
-  }
-  int held = 0;
-  QuadCage relaxed = evened_out(checks, *cage, dropped, options.hold_explained ? singular : nullptr,
-                                options.density, &held);
-  QuadStats relaxed_stats = quad_detail::measure_cage(relaxed, checks);
-  if (!relaxed_stats.flipped_quads && !relaxed_stats.degenerate_quads &&
-      relaxed_stats.mean_angle_deviation_deg < stats.mean_angle_deviation_deg) {
-    if (held)
-      messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
-                                std::to_string(held) +
-                                " irregular vertices held where singularities explain them while "
-                                "the cage was evened out");
-    relaxed_stats.collapsed_quads = stats.collapsed_quads;
-    *cage = std::move(relaxed);
-    stats = relaxed_stats;
+  for (int pass = 0; pass < std::max(1, options.place_passes); ++pass) {
+    if (pass > 0 && (!singular || !quad_detail::irregular_off_singularities(
+                                      checks, *cage, *singular, options.density)))
+      break;
+    if (singular)
+      place_onto_singularities(surface, checks, cage, &stats, messages, dropped, options,
+                               *singular);
+    even_out_kept(surface, checks, cage, &stats, messages, dropped, options, singular);
   }
   return stats;
 }

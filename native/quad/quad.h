@@ -153,6 +153,13 @@ struct QuadOptions {
   // rest again. 48 conversions (bench/quad_judge; unexplained / oversized / skewed / s,
   // counted before squaring): off 33 / 1405 / 1287 / 443, on 31 / 1392 / 1286 / 456.
   bool hold_explained = true;
+  // How often the edits onto singularities (place_irregulars) and the evening out after
+  // them run on one reading's cage: again only while irregular vertices are left that no
+  // singularity explains (the evening out moves vertices, and with them what a window's
+  // search reaches and scores). 48 conversions (bench/quad_judge; unexplained / oversized /
+  // skewed / s): 1: 32 / 1392 / 1286 / 474; 2: 27 / 1251 / 1162 / 504; 3: 29 / 1257 / 1155 /
+  // 544.
+  int place_passes = 2;
   // A curve that ends at a singular vertex within this fraction of the separatrix spacing
   // of a direction no curve leaves it along yet (measured over a target edge length back
   // along the curve) takes that direction, so the singularity's own separatrix is not
