@@ -1621,9 +1621,9 @@ TEST(Quad, CornersChosenTogetherPairUpAtTheNodeTheyShare) {
             (std::vector<int>{1, 1, 1, 1, 2}));
 }
 
-// The net of genus 16 (h = 0.12), its requested layout alone with the options `set`
-// makes: the cage checked valid and within the targets, its statistics printed under
-// `label`; returns the result.
+// The net of genus 16 (`r`, at the h its caller chose), its requested layout alone with
+// the options `set` makes: the cage checked valid and within the targets, its statistics
+// printed under `label`; returns the result.
 QuadResult requested_net4_cage(const Partitioned& r, const CrossField& field,
                                const std::function<void(QuadOptions&)>& set,
                                const std::string& label) {
@@ -1800,11 +1800,7 @@ TEST(Quad, EveningOutHoldsIrregularVerticesItsSingularitiesExplain) {
     ASSERT_EQ(result.stats.size(), 1u);
     off[hold] = result.stats[0].irregular_off_singularities;
     expect_off_singularities_listed(result);
-    const bool noted =
-        std::any_of(result.notes.begin(), result.notes.end(), [](const std::string& n) {
-          return n.find("held where singularities explain them") != std::string::npos;
-        });
-    EXPECT_EQ(noted, hold);
+    EXPECT_EQ(says(result.notes, "held where singularities explain them"), hold);
   }
   EXPECT_TRUE(QuadOptions{}.hold_explained);
   EXPECT_GE(off[0], 1);
@@ -1813,7 +1809,7 @@ TEST(Quad, EveningOutHoldsIrregularVerticesItsSingularitiesExplain) {
 
 // Where a reading's cage still has irregular vertices no singularity explains after the
 // edits onto singularities and the evening out, both run again (QuadOptions::place_passes):
-// on the net of genus 4 at h 0.115, with every layout choice, one pass leaves 1 (a 5 whose
+// on the net of genus 9 at h 0.115, with every layout choice, one pass leaves 1 (a 5 whose
 // reach the squaring shortened) and two leave none (in the reading kept, the first pass's
 // edits take 6 to 1 and the second's, on the evened-out cage, 1 to 0). Both cages valid
 // and within the targets.
