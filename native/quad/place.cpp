@@ -50,8 +50,6 @@ constexpr size_t kKeptSequences = 6;
 // Sequences of three edits or more taken on by one more where none helps (the best by
 // Score among those leaving no more unexplained vertices; place_irregulars' max_edits).
 constexpr size_t kDeepPrefixes = 64;
-// Sweeps evening out an edit's vertices and their neighbours (settle).
-constexpr int kSettleSweeps = 3;
 // Drawing pairs together (place_irregulars' draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
 // nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets,
@@ -347,11 +345,12 @@ void keep_best(std::vector<std::pair<Score, State>>& best, const Score& now, con
   if (best.size() > limit) best.pop_back();
 }
 
-// Evens out the changed vertices of `s` and their neighbours (kSettleSweeps sweeps: each
-// to the mean of its neighbours, onto the component) and tells whether the quads around
-// them are then neither squeezed (a corner under kMinPlacedCorner) nor turned over.
-// `moved`: the vertices whose points changed.
-bool settle(const CageChecks& checks, State& s, std::vector<int>* moved) {
+// Evens out the changed vertices of `s`, their neighbours and `rings` rings more (free
+// vertices within kScoreRings; `sweeps` sweeps: each to the mean of its neighbours, onto
+// the component) and tells whether the quads around them are then neither squeezed (a
+// corner under kMinPlacedCorner) nor turned over. `moved`: the vertices whose points
+// changed.
+bool settle(const CageChecks& checks, State& s, int rings, int sweeps, std::vector<int>* moved) {
   std::vector<std::vector<int>> neighbours(s.valence.size());
   for (const auto& c : s.quads)
     if (c[0] >= 0)
@@ -364,9 +363,16 @@ bool settle(const CageChecks& checks, State& s, std::vector<int>* moved) {
     for (int w : neighbours[v]) moving[w] = !s.fixed[w] && s.ring[w] <= kScoreRings;
     moving[v] = 1;
   }
+  for (int r = 0; r < rings; ++r) {
+    std::vector<char> wider = moving;
+    for (size_t v = 0; v < moving.size(); ++v)
+      if (moving[v])
+        for (int w : neighbours[v]) wider[w] |= !s.fixed[w] && s.ring[w] <= kScoreRings;
+    moving = std::move(wider);
+  }
   for (size_t v = 0; v < moving.size(); ++v)
     if (moving[v]) moved->push_back(static_cast<int>(v));
-  for (int sweep = 0; sweep < kSettleSweeps; ++sweep)
+  for (int sweep = 0; sweep < sweeps; ++sweep)
     for (int v : *moved) {
       Vec3 mean = Vec3::Zero();
       for (int w : neighbours[v]) mean += s.point[w];
@@ -386,7 +392,8 @@ bool settle(const CageChecks& checks, State& s, std::vector<int>* moved) {
 
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     bool draw_pairs_together, int max_edits, const Dropped& dropped) {
+                     bool draw_pairs_together, int max_edits, int settle_rings, int settle_sweeps,
+                     const Dropped& dropped) {
   int total = 0;
   // Vertices whose window was searched in vain and has not changed since: not again.
   std::vector<char> vain(cage.vertices.rows(), 0);
@@ -558,7 +565,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       State* chosen = nullptr;
       std::vector<int> moved;
       for (auto& [at, state] : kept)
-        if (settle(checks, state, &moved)) {
+        if (settle(checks, state, settle_rings, settle_sweeps, &moved)) {
           chosen = &state;
           break;
         }

@@ -147,6 +147,19 @@ struct QuadOptions {
   // 5: 34 / 1406 / 1293 / 466; 8: 33 / 1405 / 1287 / 443 (every sequence of four instead
   // of the best 64 taken on: 38 / 1449 / 1352 / 677, genus 64 at h 0.14 alone 37 → 213 s).
   int place_edits = 8;
+  // Where a sequence of those edits is tried on the cage, the vertices it changed, their
+  // neighbours and settle_rings rings more are evened out (settle_sweeps sweeps, each
+  // vertex to the mean of its neighbours) before its quads are judged (squeezed or turned
+  // over: not made). A 3–5 dislocation beside a cluster of −1 singularities cancels
+  // against the singular vertex it meets only by shifting a row a few edges wide (the
+  // genus-49 net at h 0.1: a 3 and a 5 in the middle of a junction go, and the 5 at the
+  // fillet's singularity moves onto it); one ring and 3 sweeps left its quads squeezed.
+  // 48 conversions (bench/quad_judge; unexplained / oversized / skewed / s), rings and
+  // sweeps: 0, 3 (before): 27 / 1251 / 1162 / 504; 0, 10: 27 / 1261 / 1133 / 499; 2, 3:
+  // 24 / 1284 / 1153 / 494; 2, 10: 22 / 1226 / 1139 / 510; 2, 20: 25 / 1264 / 1129 / 524;
+  // 3, 10: 22 / 1250 / 1137 / 508.
+  int settle_rings = 2;
+  int settle_sweeps = 10;
   // The evening out that ends each reading (after those edits) holds an irregular vertex
   // a singularity explained before it and none explains after (moved past its reach, or
   // its singularity matched to a neighbour drawn nearer) where it was, and evens out the

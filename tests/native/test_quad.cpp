@@ -1621,12 +1621,12 @@ TEST(Quad, CornersChosenTogetherPairUpAtTheNodeTheyShare) {
             (std::vector<int>{1, 1, 1, 1, 2}));
 }
 
-// The net of genus 16 (`r`, at the h its caller chose), its requested layout alone with
+// A net (`r`, of the size and at the h its caller chose), its requested layout alone with
 // the options `set` makes: the cage checked valid and within the targets, its statistics
 // printed under `label`; returns the result.
-QuadResult requested_net4_cage(const Partitioned& r, const CrossField& field,
-                               const std::function<void(QuadOptions&)>& set,
-                               const std::string& label) {
+QuadResult requested_net_cage(const Partitioned& r, const CrossField& field,
+                              const std::function<void(QuadOptions&)>& set,
+                              const std::string& label) {
   QuadOptions options;
   set(options);
   options.work_per_component = 0;  // the requested layout only
@@ -1681,7 +1681,7 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   int off[2] = {0, 0};
   for (const bool together : {false, true}) {
-    const QuadResult result = requested_net4_cage(
+    const QuadResult result = requested_net_cage(
         r, field,
         [&](QuadOptions& o) {
           o.global_corners = together;
@@ -1729,7 +1729,7 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
                        {true, true, true, "net 4x4, arrivals snapped"}};
   QuadStats stats[4];
   for (int k = 0; k < 4; ++k) {
-    const QuadResult result = requested_net4_cage(
+    const QuadResult result = requested_net_cage(
         r, field,
         [&](QuadOptions& o) {
           o.place_irregulars = runs[k].place;
@@ -1764,7 +1764,7 @@ TEST(Quad, LongerSequencesOfEditsPlaceWhatThreeCannot) {
   int off[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
     const int edits = k == 0 ? 3 : QuadOptions{}.place_edits;
-    const QuadResult result = requested_net4_cage(
+    const QuadResult result = requested_net_cage(
         r, field,
         [&](QuadOptions& o) {
           o.place_edits = edits;
@@ -1790,7 +1790,7 @@ TEST(Quad, EveningOutHoldsIrregularVerticesItsSingularitiesExplain) {
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
   int off[2] = {0, 0};
   for (const bool hold : {false, true}) {
-    const QuadResult result = requested_net4_cage(
+    const QuadResult result = requested_net_cage(
         r, field,
         [&](QuadOptions& o) {
           o.hold_explained = hold;
@@ -1812,7 +1812,8 @@ TEST(Quad, EveningOutHoldsIrregularVerticesItsSingularitiesExplain) {
 // on the net of genus 9 at h 0.115, with every layout choice, one pass leaves 1 (a 5 whose
 // reach the squaring shortened) and two leave none (in the reading kept, the first pass's
 // edits take 6 to 1 and the second's, on the evened-out cage, 1 to 0). Both cages valid
-// and within the targets.
+// and within the targets. With edits judged after one ring is evened out (settle_rings
+// 0): with two rings more, one pass already leaves none.
 TEST(Quad, EditsOntoSingularitiesRunAgainAfterTheEveningOut) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.115, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1820,6 +1821,7 @@ TEST(Quad, EditsOntoSingularitiesRunAgainAfterTheEveningOut) {
   for (const int passes : {1, 2}) {
     QuadOptions options;
     options.place_passes = passes;
+    options.settle_rings = 0;
     const QuadResult result = extract_cages(r.mesh, r.partition, field, options, Context());
     ASSERT_EQ(result.cages.size(), 1u);
     EXPECT_EQ(check_cage(result.cages[0], r), 0);
@@ -2557,9 +2559,11 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
 // the first reading alone (off_node_price 0) leaves some and reads nothing again, and so
 // does a run that reads again only above a larger share of them (off_node_share). All at
 // the density raise of when this was measured (vertices_per_singular_quarter 50),
-// without kink nodes (QuadOptions::kink_nodes) and without holding explained vertices
-// (hold_explained): at today's 35, or with kink nodes, the first reading there leaves
-// none, and nothing is read again; holding, both readings leave 5.
+// without kink nodes (QuadOptions::kink_nodes), without holding explained vertices
+// (hold_explained) and with edits judged after one ring is evened out in 3 sweeps
+// (settle_rings 0, settle_sweeps 3): at today's 35, or with kink nodes, the first reading
+// there leaves none, and nothing is read again; holding, both readings leave 5; with two
+// rings more and 10 sweeps, 4; with 10 sweeps alone, 6.
 TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.1, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -2567,6 +2571,8 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   options.vertices_per_singular_quarter = 50;
   options.kink_nodes = false;
   options.hold_explained = false;
+  options.settle_rings = 0;
+  options.settle_sweeps = 3;
   QuadOptions once = options;
   once.off_node_price = 0;
   const QuadResult first = extract_cages(r.mesh, r.partition, field, once, Context());
@@ -3118,4 +3124,26 @@ TEST(Quad, CageDensityFollowsTheSizeFieldAndTheUsersDensity) {
               total[1] / total[0], asked[1] / asked[0]);
   EXPECT_GT(total[1], 3 * total[0]);
   EXPECT_LT(total[1], 5 * total[0]);
+}
+
+// A sequence of edits onto singularities is judged after its changed vertices, their
+// neighbours and two rings more are evened out (QuadOptions::settle_rings): on the net of
+// genus 9 at h 0.115 the requested layout leaves an irregular vertex no singularity
+// explains when only one ring is evened out (the sequences that place it leave a quad
+// squeezed there), and none with two rings more; both cages valid and within the targets.
+TEST(Quad, EditsAreJudgedWithTheRingsAroundThemEvenedOut) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.115, 3)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  int off[2] = {0, 0};
+  for (const int rings : {0, QuadOptions{}.settle_rings}) {
+    const QuadResult result = requested_net_cage(
+        r, field, [&](QuadOptions& o) { o.settle_rings = rings; },
+        "net 3x3 at h 0.115, " + std::to_string(rings) + " rings more evened out");
+    ASSERT_EQ(result.stats.size(), 1u);
+    off[rings > 0] = result.stats[0].irregular_off_singularities;
+    expect_off_singularities_listed(result);
+  }
+  EXPECT_GT(QuadOptions{}.settle_rings, 0);
+  EXPECT_GE(off[0], 1);
+  EXPECT_LT(off[1], off[0]);
 }

@@ -575,16 +575,19 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
 // vertex of 5–8 quads; none at a chain or crease vertex — are scored on the window's
 // connectivity (fewest unexplained vertices, then fewest irregular); of those leaving
 // fewer unexplained, the best few are evened out around their changed vertices in turn
-// and the first whose quads are neither squeezed nor turned over is made (those vertices
-// and their neighbours move, onto the component). Windows edited in one round are
+// and the first whose quads are neither squeezed nor turned over is made (those vertices,
+// their neighbours and `settle_rings` rings more move, `settle_sweeps` times each to the
+// mean of its neighbours, onto the component; a dislocation cancelled against a singular
+// vertex shifts rows a few edges wide, whose quads one ring cannot open). Windows edited
+// in one round are
 // disjoint; at most `max_rounds` rounds. With `draw_pairs_together` a sequence leaving
 // as many unexplained vertices and no more irregular ones is made too if it brings them
 // nearer to ones of opposite sign (QuadOptions::draw_pairs_together). The caller opens
 // squeezed quads and checks the cage. Returns the windows edited (0: the cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     bool draw_pairs_together = false, int max_edits = 3,
-                     const Dropped& dropped = Dropped());
+                     bool draw_pairs_together = false, int max_edits = 3, int settle_rings = 0,
+                     int settle_sweeps = 3, const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
