@@ -579,11 +579,11 @@ int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rou
 // their neighbours and `settle_rings` rings more move, `settle_sweeps` times each to the
 // mean of its neighbours, onto the component; a dislocation cancelled against a singular
 // vertex shifts rows a few edges wide, whose quads one ring cannot open). Windows edited
-// in one round are
-// disjoint; at most `max_rounds` rounds. With `draw_pairs_together` a sequence leaving
-// as many unexplained vertices and no more irregular ones is made too if it brings them
-// nearer to ones of opposite sign (QuadOptions::draw_pairs_together). The caller opens
-// squeezed quads and checks the cage. Returns the windows edited (0: the cage is unchanged).
+// in one round are disjoint; at most `max_rounds` rounds. With `draw_pairs_together` a
+// sequence leaving as many unexplained vertices and no more irregular ones is made too
+// if it brings them nearer to ones of opposite sign (QuadOptions::draw_pairs_together).
+// The caller opens squeezed quads and checks the cage. Returns the windows edited (0: the
+// cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      bool draw_pairs_together = false, int max_edits = 3, int settle_rings = 0,
