@@ -3129,8 +3129,8 @@ TEST(Quad, CageDensityFollowsTheSizeFieldAndTheUsersDensity) {
 // A sequence of edits onto singularities is judged after its changed vertices, their
 // neighbours and two rings more are evened out (QuadOptions::settle_rings): on the net of
 // genus 9 at h 0.115 the requested layout leaves an irregular vertex no singularity
-// explains when only one ring is evened out (the sequences that place it leave a quad
-// squeezed there), and none with two rings more; both cages valid and within the targets.
+// explains when only one ring is evened out, and none with two rings more; both cages
+// valid and within the targets.
 TEST(Quad, EditsAreJudgedWithTheRingsAroundThemEvenedOut) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.115, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
