@@ -48,9 +48,9 @@ constexpr double kMinPlacedCorner = 5.0;
 // Improving sequences kept per window, tried best first until one settles.
 constexpr size_t kKeptSequences = 6;
 // Sequences of three edits or more taken on by one more where none helps (the best by
-// Score among those leaving no more unexplained vertices; place_irregulars' max_edits).
+// Score among those leaving no more unexplained vertices; PlaceSettings::max_edits).
 constexpr size_t kDeepPrefixes = 64;
-// Drawing pairs together (place_irregulars' draw_pairs_together): a sequence leaving as many
+// Drawing pairs together (PlaceSettings::draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
 // nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets,
 // before the three-edit search's fix below: 297 → 276 with 3 and 0.25; 278 with 6 and
@@ -392,8 +392,8 @@ bool settle(const CageChecks& checks, State& s, int rings, int sweeps, std::vect
 
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     bool draw_pairs_together, int max_edits, int settle_rings, int settle_sweeps,
-                     const Dropped& dropped) {
+                     const PlaceSettings& settings, const Dropped& dropped) {
+  const int max_edits = settings.max_edits;
   int total = 0;
   // Vertices whose window was searched in vain and has not changed since: not again.
   std::vector<char> vain(cage.vertices.rows(), 0);
@@ -487,7 +487,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       // unexplained vertices (or as many, no more irregular ones, drawn kPairCloser nearer
       // to ones of opposite sign) are kept, best first.
       auto score_now = [&] {
-        return score(s, near, scored, window_vertices, explains, start_point, draw_pairs_together);
+        return score(s, near, scored, window_vertices, explains, start_point,
+                     settings.draw_pairs_together);
       };
       const Score before = score_now();
       std::vector<std::pair<Score, State>> kept;
@@ -565,7 +566,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       State* chosen = nullptr;
       std::vector<int> moved;
       for (auto& [at, state] : kept)
-        if (settle(checks, state, settle_rings, settle_sweeps, &moved)) {
+        if (settle(checks, state, settings.settle_rings, settings.settle_sweeps, &moved)) {
           chosen = &state;
           break;
         }

@@ -435,9 +435,13 @@ void place_onto_singularities(const quad_detail::Surface& surface,
                               const std::vector<quad_detail::SingularPoint>& singular) {
   const double density = options.density;
   QuadCage placed = *cage;
-  const int windows = quad_detail::place_irregulars(
-      checks, placed, singular, density, kPlaceRounds, options.draw_pairs_together,
-      options.place_edits, options.settle_rings, options.settle_sweeps, dropped);
+  quad_detail::PlaceSettings settings;
+  settings.draw_pairs_together = options.draw_pairs_together;
+  settings.max_edits = options.place_edits;
+  settings.settle_rings = options.settle_rings;
+  settings.settle_sweeps = options.settle_sweeps;
+  const int windows = quad_detail::place_irregulars(checks, placed, singular, density, kPlaceRounds,
+                                                    settings, dropped);
   if (!windows) return;
   const int off = quad_detail::irregular_off_singularities(checks, *cage, singular, density);
   const int left = quad_detail::open_squeezed(checks, placed, 24);

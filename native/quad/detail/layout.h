@@ -568,26 +568,34 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
 // rotations and splits (0: the cage is unchanged).
 int cancel_irregular_pairs(const CageChecks& checks, QuadCage& cage, int max_rounds,
                            const Dropped& dropped = Dropped());
+// How place_irregulars searches and judges (the defaults: the search as first written;
+// QuadOptions fills them in the pipeline).
+struct PlaceSettings {
+  // A sequence leaving as many unexplained vertices and no more irregular ones is made too
+  // if it brings them nearer to ones of opposite sign (QuadOptions::draw_pairs_together).
+  bool draw_pairs_together = false;
+  int max_edits = 3;      // the longest sequence tried (QuadOptions::place_edits)
+  int settle_rings = 0;   // rings evened out beyond the changed vertices' neighbours
+  int settle_sweeps = 3;  // sweeps of that evening out
+};
 // Moves irregular vertices no singularity explains (irregular_off_singularities) onto the
 // singularities beside them, or cancels them (place.cpp): around each, sequences of up to
 // two edits (three where two do not help, then one more at a time after the best of those
-// up to `max_edits`) — edge rotation, diagonal collapse, split of a
+// up to `settings.max_edits`) — edge rotation, diagonal collapse, split of a
 // vertex of 5–8 quads; none at a chain or crease vertex — are scored on the window's
 // connectivity (fewest unexplained vertices, then fewest irregular); of those leaving
 // fewer unexplained, the best few are evened out around their changed vertices in turn
 // and the first whose quads are neither squeezed nor turned over is made (those vertices,
-// their neighbours and `settle_rings` rings more move, `settle_sweeps` times each to the
-// mean of its neighbours, onto the component; a dislocation cancelled against a singular
-// vertex shifts rows a few edges wide, whose quads one ring cannot open). Windows edited
-// in one round are disjoint; at most `max_rounds` rounds. With `draw_pairs_together` a
-// sequence leaving as many unexplained vertices and no more irregular ones is made too
-// if it brings them nearer to ones of opposite sign (QuadOptions::draw_pairs_together).
-// The caller opens squeezed quads and checks the cage. Returns the windows edited (0: the
-// cage is unchanged).
+// their neighbours and `settings.settle_rings` rings more move, `settings.settle_sweeps`
+// times each to the mean of its neighbours, onto the component; a dislocation cancelled
+// against a singular vertex shifts rows a few edges wide, whose quads one ring cannot
+// open). Windows edited in one round are disjoint; at most `max_rounds` rounds. The caller
+// opens squeezed quads and checks the cage. Returns the windows edited (0: the cage is
+// unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     bool draw_pairs_together = false, int max_edits = 3, int settle_rings = 0,
-                     int settle_sweeps = 3, const Dropped& dropped = Dropped());
+                     const PlaceSettings& settings = PlaceSettings(),
+                     const Dropped& dropped = Dropped());
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
