@@ -4,7 +4,9 @@
 // (irregular_off_singularities' matching), every sequence of at most two edits — an edge
 // rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
 // the window's connectivity alone (the first edit changing an irregular vertex, the
-// second one of the vertices the first changed), and where none helps every sequence of
+// second one of the vertices the first changed; chain vertices keep their place and never
+// gain a quad, but one of three quads where the region is straight may lose one:
+// shedding_chain_vertices), and where none helps every sequence of
 // three whose first two leave no more unexplained, and then (up to max_edits) one edit
 // more at a time after the kDeepPrefixes best sequences so far that leave no more
 // unexplained (a 6 and a 3 beside a −1 singularity can need four); of those leaving
@@ -26,6 +28,7 @@
 // vain are not searched again until an edit touches them.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <set>
 #include <tuple>
@@ -47,6 +50,8 @@ constexpr int kMaxSplitValence = 8;
 constexpr double kMinPlacedCorner = 5.0;
 // Improving sequences kept per window, tried best first until one settles.
 constexpr size_t kKeptSequences = 6;
+// A chain vertex whose quads' corners sum to less than this (radians) may lose a quad.
+constexpr double kShedAngle = 225.0 * M_PI / 180.0;
 // Sequences of three edits or more taken on by one more where none helps (the best by
 // Score among those leaving no more unexplained vertices; PlaceSettings::max_edits).
 constexpr size_t kDeepPrefixes = 64;
@@ -64,6 +69,7 @@ struct State {
   std::vector<int> origin;                // per quad: the cage's quad, or -1 (added)
   std::vector<int> valence, ring;         // per local vertex (ring: from the vertex)
   std::vector<char> fixed;                // on a chain or a crease edge
+  std::vector<char> shed;                 // a chain vertex that may lose a quad (sheds)
   std::vector<Vec3> point;
   std::vector<double> reach;
   std::vector<int> changed;               // vertices whose valence an edit changed
@@ -106,6 +112,7 @@ class Editor {
   int add_vertex(int valence, int ring, const Vec3& point, double reach) {
     const int v = static_cast<int>(s_.valence.size());
     s_.valence.push_back(valence), s_.ring.push_back(ring), s_.fixed.push_back(0);
+    s_.shed.push_back(0);
     s_.point.push_back(point), s_.reach.push_back(reach), s_.changed.push_back(v);
     return v;
   }
@@ -117,6 +124,7 @@ class Editor {
     }
     s_.quads.resize(quads_), s_.origin.resize(quads_);
     s_.valence.resize(vertices_), s_.ring.resize(vertices_), s_.fixed.resize(vertices_);
+    s_.shed.resize(vertices_);
     s_.point.resize(vertices_), s_.reach.resize(vertices_);
     s_.changed.resize(changed_);
   }
@@ -160,6 +168,12 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
     return false;
   };
   auto movable = [&](int v) { return !s.fixed[v] && s.ring[v] <= kScoreRings; };
+  // Vertices an edit takes a quad from: free ones of four or more, and chain vertices of
+  // three or more that may shed one (their place and chain edges stay).
+  auto loses = [&](int v) {
+    return movable(v) ? s.valence[v] >= 4
+                      : s.shed[v] && s.valence[v] >= 3 && s.ring[v] <= kScoreRings;
+  };
   std::vector<int> splittable;
   for (int q = 0; q < nq; ++q) {
     if (!in_focus(q)) continue;
@@ -168,7 +182,7 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
     // Edge rotations: u–w between (u, w, a, b) and (w, u, c, d) becomes c–a or d–b.
     for (int k = 0; k < 4; ++k) {
       const int u = c[k], w = c[(k + 1) % 4];
-      if (!movable(u) || !movable(w) || s.valence[u] < 4 || s.valence[w] < 4) continue;
+      if (!loses(u) || !loses(w) || (!movable(u) && !movable(w))) continue;
       const int h = he.find(w, u);
       if (h < 0 || (u > w && in_focus(h / 4))) continue;  // each edge once
       const int q2 = h / 4, k2 = h % 4;
@@ -194,8 +208,8 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
     // Diagonal collapses: p0 and p2 merge (valence a + c − 2 ≤ 6), p1 and p3 keep ≥ 3 quads.
     for (int k = 0; k < 2; ++k) {
       const int p0 = c[k], p1 = c[k + 1], p2 = c[k + 2], p3 = c[(k + 3) % 4];
-      if (!movable(p0) || !movable(p1) || !movable(p2) || !movable(p3)) continue;
-      if (s.valence[p0] + s.valence[p2] - 2 > 6 || s.valence[p1] < 4 || s.valence[p3] < 4) continue;
+      if (!movable(p0) || !movable(p2) || !loses(p1) || !loses(p3)) continue;
+      if (s.valence[p0] + s.valence[p2] - 2 > 6) continue;
       if (he.joined(p0, p2)) continue;
       // The link condition: p0 and p2 share no neighbour but p1 and p3, and no other quad.
       std::vector<int> around0;  // p0's edge neighbours
@@ -335,6 +349,33 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
           static_cast<int>(irregular.size()), apart};
 }
 
+// Per cage vertex: a chain vertex, on no crease edge, of three quads or more where the
+// region's angle (the quads' corners at it, summed) is under kShedAngle, so that two quads
+// would cover it (a smooth stretch of the loop, not a concave corner). An edit may take a
+// quad from it (for_each_edit): an interior 3 beside it, with nothing else irregular near,
+// leaves their quarter turns adding up to +1 inside, which no edit of interior vertices
+// alone places.
+std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncidence& incidence,
+                                          const std::vector<char>& fixed) {
+  std::vector<char> crease(fixed.size(), 0);
+  for (const auto& e : cage.crease_edges) crease[e[0]] = crease[e[1]] = 1;
+  std::vector<char> shed(fixed.size(), 0);
+  for (size_t v = 0; v < shed.size(); ++v) {
+    if (!incidence.on_chain[v] || crease[v] || incidence.quads_of[v].size() < 3) continue;
+    const Vec3 p = cage.vertices.row(v).transpose();
+    double angle = 0;
+    for (int q : incidence.quads_of[v])
+      for (int k = 0; k < 4; ++k)
+        if (cage.quads(q, k) == static_cast<int>(v)) {
+          const Vec3 a = cage.vertices.row(cage.quads(q, (k + 1) % 4)).transpose() - p;
+          const Vec3 b = cage.vertices.row(cage.quads(q, (k + 3) % 4)).transpose() - p;
+          angle += std::atan2(a.cross(b).norm(), a.dot(b));
+        }
+    shed[v] = angle < kShedAngle;
+  }
+  return shed;
+}
+
 // Puts `s` into `best` (sorted by score, best first) if it is among the `limit` best.
 void keep_best(std::vector<std::pair<Score, State>>& best, const Score& now, const State& s,
                size_t limit) {
@@ -403,6 +444,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     const int nv = static_cast<int>(cage.vertices.rows());
     std::vector<char> fixed = incidence.on_chain;
     for (const auto& e : cage.crease_edges) fixed[e[0]] = fixed[e[1]] = 1;
+    const std::vector<char> shed = shedding_chain_vertices(cage, incidence, fixed);
     std::vector<double> reach(nv, -1);
     auto reach_of = [&](int v) {
       if (reach[v] < 0) reach[v] = singular_reach(checks, cage, incidence, v, density);
@@ -450,6 +492,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
           s.valence.push_back(static_cast<int>(incidence.quads_of[v].size()));
           s.ring.push_back(ring[v] >= 0 ? ring[v] : kWindowRings + 1);
           s.fixed.push_back(fixed[v]);
+          s.shed.push_back(shed[v]);
           s.point.push_back(points[v]);
           s.reach.push_back(reach_of(v));
         }

@@ -1561,6 +1561,40 @@ TEST(Quad, OnlyIrregularVerticesNoSingularityExplainsAreEdited) {
       EXPECT_TRUE(directed.insert({placed.quads(q, k), placed.quads(q, (k + 1) % 4)}).second);
 }
 
+// A chain vertex of three quads where the region is straight sheds one when that places
+// the interior vertices beside it: on the 7 × 7 cage, the edge between (2, 1) and (3, 1)
+// rotated to run from chain vertex (2, 0) to (3, 2) leaves 3s at (1.7, 1) and (3.3, 1), a 5
+// at (3, 2), and (2, 0) on the straight side with three quads. Their quarter turns add up
+// to +1 inside, so no edit of interior vertices alone leaves none unexplained; rotated
+// back (the chain vertex losing its third quad) the grid is regular again. A chain vertex
+// keeps its place, and the chain is unchanged.
+TEST(Quad, AChainVertexOfThreeQuadsOnAStraightSideShedsOne) {
+  const FlatChecks square(31, 0.2);  // the square [0, 6]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
+  const int m = 7;
+  const int u = m + 2, w = m + 3, a = 2 * m + 3, b = 2 * m + 2, c = 2, d = 3;
+  QuadCage shed = regular_flat_cage(m);
+  shed.vertices.row(u) << 1.7, 1, 0;
+  shed.vertices.row(w) << 3.3, 1, 0;
+  shed.quads.row((m - 1) + 2) << c, d, w, a;  // was (u, w, a, b)
+  shed.quads.row(2) << a, b, u, c;            // was (c, d, w, u)
+  ASSERT_EQ(bad_flat_quads(shed), 0);
+  ASSERT_EQ(interior_valences(shed), (std::map<int, int>{{3, 2}, {4, 22}, {5, 1}}));
+  const QuadCage before = shed;
+  ASSERT_EQ(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 3);
+  EXPECT_GE(quad_detail::place_irregulars(checks, shed, {}, 1.0, 4), 1);
+  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 0);
+  EXPECT_EQ(interior_valences(shed), (std::map<int, int>{{4, 25}}));
+  EXPECT_EQ(bad_flat_quads(shed), 0);
+  EXPECT_EQ(shed.boundary_chains, before.boundary_chains);
+  for (int v : before.boundary_chains[0])
+    EXPECT_EQ(shed.vertices.row(v), before.vertices.row(v)) << v;
+  int quads_at_c = 0;
+  for (int q = 0; q < shed.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) quads_at_c += shed.quads(q, k) == c;
+  EXPECT_EQ(quads_at_c, 2);
+}
+
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four
 // curves, with a curve S across it at y = 2 and a separatrix leaving the left side at
 // y = 2.2 that joins S, the layout has three four-sided patches (below S, the strip

@@ -581,17 +581,17 @@ struct PlaceSettings {
 // Moves irregular vertices no singularity explains (irregular_off_singularities) onto the
 // singularities beside them, or cancels them (place.cpp): around each, sequences of up to
 // two edits (three where two do not help, then one more at a time after the best of those
-// up to `settings.max_edits`) — edge rotation, diagonal collapse, split of a
-// vertex of 5–8 quads; none at a chain or crease vertex — are scored on the window's
-// connectivity (fewest unexplained vertices, then fewest irregular); of those leaving
-// fewer unexplained, the best few are evened out around their changed vertices in turn
-// and the first whose quads are neither squeezed nor turned over is made (those vertices,
-// their neighbours and `settings.settle_rings` rings more move, `settings.settle_sweeps`
-// times each to the mean of its neighbours, onto the component; a dislocation cancelled
-// against a singular vertex shifts rows a few edges wide, whose quads one ring cannot
-// open). Windows edited in one round are disjoint; at most `max_rounds` rounds. The caller
-// opens squeezed quads and checks the cage. Returns the windows edited (0: the cage is
-// unchanged).
+// up to `settings.max_edits`) — edge rotation, diagonal collapse, split of a vertex of 5–8
+// quads; none moving a chain or crease vertex or giving one a quad, though a chain vertex
+// of three quads on a smooth stretch of its loop may lose one — are scored on the window's
+// connectivity (fewest unexplained vertices, then fewest irregular); of those leaving fewer
+// unexplained, the best few are evened out around their changed vertices in turn and the
+// first whose quads are neither squeezed nor turned over is made (those vertices, their
+// neighbours and `settings.settle_rings` rings more move, `settings.settle_sweeps` times
+// each to the mean of its neighbours, onto the component; a dislocation cancelled against a
+// singular vertex shifts rows a few edges wide, whose quads one ring cannot open). Windows
+// edited in one round are disjoint; at most `max_rounds` rounds. The caller opens squeezed
+// quads and checks the cage. Returns the windows edited (0: the cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings = PlaceSettings(),
