@@ -1,27 +1,26 @@
-// quad/place.cpp — irregular vertices the layout left beside the field's singularities
-// are edited onto them, or away (quad/quad.h step 4, after the pair cancelling of
+// quad/place.cpp — irregular vertices the layout left beside the field's singularities are
+// edited onto them, or away (quad/quad.h step 4, after the pair cancelling of
 // untangle.cpp). Around each irregular vertex no singularity explains
 // (irregular_off_singularities' matching), every sequence of at most two edits — an edge
 // rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
-// the window's connectivity alone (the first edit changing an irregular vertex, the
-// second one of the vertices the first changed; chain vertices keep their place and never
-// gain a quad, but one of three quads where the region is straight may lose one:
-// shedding_chain_vertices), and where none helps every sequence of
-// three whose first two leave no more unexplained, and then (up to max_edits) one edit
-// more at a time after the kDeepPrefixes best sequences so far that leave no more
-// unexplained (a 6 and a 3 beside a −1 singularity can need four); of those leaving
-// fewer unexplained vertices, the best few (fewest unexplained, then fewest irregular) are
-// evened out in turn around their changed vertices, and the first whose quads come out
-// neither squeezed nor turned over is made. Such defects are a −1 singularity drawn as a
-// 6 and a 3, or a 5 with a 3–5 pair beside it (a dislocation: the singular vertex one
-// edge off); one edit rarely mends them, two often do (genus-36 net at h 0.12: a search of
-// the cage found 2 of 49 with one edit, 25 with two; the three-edit search took the
-// cage's 18 left to 14). A 3 and a 5 the layout left a few edges apart, away from any
-// singularity (rows shifting by one where a sliver or cusp collapsed), need more edits
-// than that: sequences leaving as many unexplained and no more irregular vertices that
-// draw them nearer each other are ranked too, after those leaving fewer
-// (draw_pairs_together), and later rounds cancel them once they meet. The caller opens
-// squeezed quads and evens the whole cage out.
+// the window's connectivity alone (the first edit changing an irregular vertex, the second
+// one of the vertices the first changed; chain vertices keep their place and never gain a
+// quad, but one of three quads where the region is straight may lose one:
+// shedding_chain_vertices), and where none helps every sequence of three whose first two
+// leave no more unexplained, and then (up to max_edits) one edit more at a time after the
+// kDeepPrefixes best sequences so far that leave no more unexplained (a 6 and a 3 beside a
+// −1 singularity can need four); of those leaving fewer unexplained vertices, the best few
+// (fewest unexplained, then fewest irregular) are evened out in turn around their changed
+// vertices, and the first whose quads come out neither squeezed nor turned over is made.
+// Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
+// (a dislocation: the singular vertex one edge off); one edit rarely mends them, two often
+// do (genus-36 net at h 0.12: a search of the cage found 2 of 49 with one edit, 25 with
+// two; the three-edit search took the cage's 18 left to 14). A 3 and a 5 the layout left a
+// few edges apart, away from any singularity (rows shifting by one where a sliver or cusp
+// collapsed), need more edits than that: sequences leaving as many unexplained and no more
+// irregular vertices that draw them nearer each other are ranked too, after those leaving
+// fewer (draw_pairs_together), and later rounds cancel them once they meet. The caller
+// opens squeezed quads and evens the whole cage out.
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
 // two edits do not help (pruned: the second must not add unexplained vertices), and
 // kDeepPrefixes × (edits in the window) more per edit beyond three; windows searched in
@@ -205,7 +204,8 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
         edit.undo();
       }
     }
-    // Diagonal collapses: p0 and p2 merge (valence a + c − 2 ≤ 6), p1 and p3 keep ≥ 3 quads.
+    // Diagonal collapses: p0 and p2 merge (valence a + c − 2 ≤ 6), p1 and p3 keep ≥ 3 quads
+    // (a shedding chain vertex ≥ 2).
     for (int k = 0; k < 2; ++k) {
       const int p0 = c[k], p1 = c[k + 1], p2 = c[k + 2], p3 = c[(k + 3) % 4];
       if (!movable(p0) || !movable(p2) || !loses(p1) || !loses(p3)) continue;
@@ -355,11 +355,10 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
 // quad from it (for_each_edit): an interior 3 beside it, with nothing else irregular near,
 // leaves their quarter turns adding up to +1 inside, which no edit of interior vertices
 // alone places.
-std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncidence& incidence,
-                                          const std::vector<char>& fixed) {
-  std::vector<char> crease(fixed.size(), 0);
+std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncidence& incidence) {
+  std::vector<char> crease(cage.vertices.rows(), 0);
   for (const auto& e : cage.crease_edges) crease[e[0]] = crease[e[1]] = 1;
-  std::vector<char> shed(fixed.size(), 0);
+  std::vector<char> shed(cage.vertices.rows(), 0);
   for (size_t v = 0; v < shed.size(); ++v) {
     if (!incidence.on_chain[v] || crease[v] || incidence.quads_of[v].size() < 3) continue;
     const Vec3 p = cage.vertices.row(v).transpose();
@@ -444,7 +443,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     const int nv = static_cast<int>(cage.vertices.rows());
     std::vector<char> fixed = incidence.on_chain;
     for (const auto& e : cage.crease_edges) fixed[e[0]] = fixed[e[1]] = 1;
-    const std::vector<char> shed = shedding_chain_vertices(cage, incidence, fixed);
+    const std::vector<char> shed = shedding_chain_vertices(cage, incidence);
     std::vector<double> reach(nv, -1);
     auto reach_of = [&](int v) {
       if (reach[v] < 0) reach[v] = singular_reach(checks, cage, incidence, v, density);
