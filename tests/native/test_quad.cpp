@@ -1567,32 +1567,43 @@ TEST(Quad, OnlyIrregularVerticesNoSingularityExplainsAreEdited) {
 // at (3, 2), and (2, 0) on the straight side with three quads. Their quarter turns add up
 // to +1 inside, so no edit of interior vertices alone leaves none unexplained; rotated
 // back (the chain vertex losing its third quad) the grid is regular again. A chain vertex
-// keeps its place, and the chain is unchanged.
+// keeps its place, and the chain is unchanged. With (2, 0) moved up to (2, 0.8), the
+// region's angle there is 257°, a concave corner three quads rightly cover: it keeps
+// them, and an unexplained vertex stays inside.
 TEST(Quad, AChainVertexOfThreeQuadsOnAStraightSideShedsOne) {
   const FlatChecks square(31, 0.2);  // the square [0, 6]², target size 1
   const quad_detail::CageChecks& checks = square.checks;
   const int m = 7;
   const int u = m + 2, w = m + 3, a = 2 * m + 3, b = 2 * m + 2, c = 2, d = 3;
-  QuadCage shed = regular_flat_cage(m);
-  shed.vertices.row(u) << 1.7, 1, 0;
-  shed.vertices.row(w) << 3.3, 1, 0;
-  shed.quads.row((m - 1) + 2) << c, d, w, a;  // was (u, w, a, b)
-  shed.quads.row(2) << a, b, u, c;            // was (c, d, w, u)
-  ASSERT_EQ(bad_flat_quads(shed), 0);
-  ASSERT_EQ(interior_valences(shed), (std::map<int, int>{{3, 2}, {4, 22}, {5, 1}}));
-  const QuadCage before = shed;
-  ASSERT_EQ(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 3);
-  EXPECT_GE(quad_detail::place_irregulars(checks, shed, {}, 1.0, 4), 1);
-  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 0);
-  EXPECT_EQ(interior_valences(shed), (std::map<int, int>{{4, 25}}));
-  EXPECT_EQ(bad_flat_quads(shed), 0);
-  EXPECT_EQ(shed.boundary_chains, before.boundary_chains);
-  for (int v : before.boundary_chains[0])
-    EXPECT_EQ(shed.vertices.row(v), before.vertices.row(v)) << v;
-  int quads_at_c = 0;
-  for (int q = 0; q < shed.quads.rows(); ++q)
-    for (int k = 0; k < 4; ++k) quads_at_c += shed.quads(q, k) == c;
-  EXPECT_EQ(quads_at_c, 2);
+  for (const bool concave : {false, true}) {
+    SCOPED_TRACE(concave ? "concave corner" : "straight side");
+    QuadCage shed = regular_flat_cage(m);
+    shed.vertices.row(u) << 1.7, 1, 0;
+    shed.vertices.row(w) << 3.3, 1, 0;
+    if (concave) shed.vertices.row(c) << 2, 0.8, 0;
+    shed.quads.row((m - 1) + 2) << c, d, w, a;  // was (u, w, a, b)
+    shed.quads.row(2) << a, b, u, c;            // was (c, d, w, u)
+    ASSERT_EQ(bad_flat_quads(shed), 0);
+    ASSERT_EQ(interior_valences(shed), (std::map<int, int>{{3, 2}, {4, 22}, {5, 1}}));
+    const QuadCage before = shed;
+    ASSERT_EQ(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 3);
+    quad_detail::place_irregulars(checks, shed, {}, 1.0, 4);
+    int quads_at_c = 0;
+    for (int q = 0; q < shed.quads.rows(); ++q)
+      for (int k = 0; k < 4; ++k) quads_at_c += shed.quads(q, k) == c;
+    EXPECT_EQ(bad_flat_quads(shed), 0);
+    EXPECT_EQ(shed.boundary_chains, before.boundary_chains);
+    for (int v : before.boundary_chains[0])
+      EXPECT_EQ(shed.vertices.row(v), before.vertices.row(v)) << v;
+    if (concave) {
+      EXPECT_EQ(quads_at_c, 3);
+      EXPECT_GE(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 1);
+    } else {
+      EXPECT_EQ(quads_at_c, 2);
+      EXPECT_EQ(quad_detail::irregular_off_singularities(checks, shed, {}, 1.0), 0);
+      EXPECT_EQ(interior_valences(shed), (std::map<int, int>{{4, 25}}));
+    }
+  }
 }
 
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four
