@@ -361,15 +361,13 @@ std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncide
   std::vector<char> shed(cage.vertices.rows(), 0);
   for (size_t v = 0; v < shed.size(); ++v) {
     if (!incidence.on_chain[v] || crease[v] || incidence.quads_of[v].size() < 3) continue;
-    const Vec3 p = cage.vertices.row(v).transpose();
+    auto point = [&](int w) -> Vec3 { return cage.vertices.row(w).transpose(); };
     double angle = 0;
     for (int q : incidence.quads_of[v])
       for (int k = 0; k < 4; ++k)
-        if (cage.quads(q, k) == static_cast<int>(v)) {
-          const Vec3 a = cage.vertices.row(cage.quads(q, (k + 1) % 4)).transpose() - p;
-          const Vec3 b = cage.vertices.row(cage.quads(q, (k + 3) % 4)).transpose() - p;
-          angle += std::atan2(a.cross(b).norm(), a.dot(b));
-        }
+        if (cage.quads(q, k) == static_cast<int>(v))
+          angle += corner_angle(point(v), point(cage.quads(q, (k + 1) % 4)),
+                                point(cage.quads(q, (k + 3) % 4)));
     shed[v] = angle < kShedAngle;
   }
   return shed;
