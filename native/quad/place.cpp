@@ -5,11 +5,11 @@
 // rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
 // the window's connectivity alone (the first edit changing an irregular vertex, the second
 // one of the vertices the first changed; chain vertices keep their place and never gain a
-// quad, but one of three quads where the region is straight may lose one:
-// shedding_chain_vertices), and where none helps every sequence of three whose first two
-// leave no more unexplained, and then (up to max_edits) one edit more at a time after the
-// kDeepPrefixes best sequences so far that leave no more unexplained (a 6 and a 3 beside a
-// −1 singularity can need four); of those leaving fewer unexplained vertices, the best few
+// quad, but one of three quads where the region is straight may lose one, and is counted
+// as irregular: shedding_chain_vertices), and where none helps every sequence of three
+// whose first two leave no more unexplained, and then (up to max_edits) one edit more at a time
+// after the kDeepPrefixes best sequences so far that leave no more unexplained (a 6 and a 3 beside
+// a −1 singularity can need four); of those leaving fewer unexplained vertices, the best few
 // (fewest unexplained, then fewest irregular) are evened out in turn around their changed
 // vertices, and the first whose quads come out neither squeezed nor turned over is made.
 // Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
@@ -306,7 +306,9 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
 }
 
 // Unexplained vertices, then irregular ones, among the scored vertices (`scored`: the
-// window's vertices within kScoreRings and not on a chain; vertices added since are too),
+// window's vertices within kScoreRings that are not on a chain or may shed a quad;
+// vertices added since are too; a chain vertex is regular with two quads and carries
+// 2 − quads),
 // then with `spread` how far the unexplained ones are from one of opposite sign (in reaches,
 // each up to kPairSpreadCap, summed; 0 without).
 // `explains`: per window vertex, the singularities near enough to explain it where it was,
@@ -321,9 +323,11 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
   thread_local std::vector<int> left;
   irregular.clear(), pairs.clear();
   auto add = [&](int v) {
-    if (s.valence[v] == 0 || s.valence[v] == 4) return;
+    // A chain vertex that may shed a quad is regular with two.
+    const int regular = s.shed[v] ? 2 : 4;
+    if (s.valence[v] == 0 || s.valence[v] == regular) return;
     const int entry = static_cast<int>(irregular.size());
-    irregular.push_back({v, 4 - s.valence[v], s.point[v], s.reach[v]});
+    irregular.push_back({v, regular - s.valence[v], s.point[v], s.reach[v]});
     if (static_cast<size_t>(v) < window_vertices && s.point[v] == start_point[v]) {
       for (const Explaining& x : explains[v])
         if (singular[x.point].index * irregular.back().carries > 0)
@@ -354,7 +358,10 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
 // would cover it (a smooth stretch of the loop, not a concave corner). An edit may take a
 // quad from it (for_each_edit): an interior 3 beside it, with nothing else irregular near,
 // leaves their quarter turns adding up to +1 inside, which no edit of interior vertices
-// alone places.
+// alone places. The search counts it as irregular (carrying −1 with three quads): a
+// sequence that sheds its quad and glides the 3–5 pair this leaves a few rows in, until
+// it meets a singular vertex, passes through as many unexplained vertices as it started
+// with; counting interior vertices alone, it passes through one more and is cut off.
 std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncidence& incidence) {
   std::vector<char> crease(cage.vertices.rows(), 0);
   for (const auto& e : cage.crease_edges) crease[e[0]] = crease[e[1]] = 1;
@@ -508,7 +515,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       if (!free) continue;
       std::vector<int> scored;
       for (size_t l = 0; l < s.valence.size(); ++l)
-        if (s.ring[l] <= kScoreRings && !incidence.on_chain[global[l]]) scored.push_back(static_cast<int>(l));
+        if (s.ring[l] <= kScoreRings && (!incidence.on_chain[global[l]] || s.shed[l]))
+          scored.push_back(static_cast<int>(l));
       const size_t window_vertices = s.valence.size();
       // The singularities that can explain a vertex of the window.
       const Vec3 centre = irregular[e].point;

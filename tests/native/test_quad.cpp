@@ -1606,6 +1606,83 @@ TEST(Quad, AChainVertexOfThreeQuadsOnAStraightSideShedsOne) {
   }
 }
 
+// Rotates the edge u–w of a cage so that it runs from the corner x opposite it in one of
+// its two quads to the corner opposite it in the other.
+void rotate_edge(QuadCage& cage, int u, int w, int x) {
+  int q = -1, k = -1, q2 = -1, k2 = -1;
+  for (int r = 0; r < cage.quads.rows(); ++r)
+    for (int j = 0; j < 4; ++j) {
+      if (cage.quads(r, j) == u && cage.quads(r, (j + 1) % 4) == w) q = r, k = j;
+      if (cage.quads(r, j) == w && cage.quads(r, (j + 1) % 4) == u) q2 = r, k2 = j;
+    }
+  ASSERT_TRUE(q >= 0 && q2 >= 0);
+  const int a = cage.quads(q, (k + 2) % 4), b = cage.quads(q, (k + 3) % 4);
+  const int c = cage.quads(q2, (k2 + 2) % 4), d = cage.quads(q2, (k2 + 3) % 4);
+  ASSERT_TRUE(x == a || x == b || x == c || x == d);
+  if (x == c || x == a) {
+    cage.quads.row(q) << c, d, w, a;
+    cage.quads.row(q2) << a, b, u, c;
+  } else {
+    cage.quads.row(q) << d, w, a, b;
+    cage.quads.row(q2) << b, u, c, d;
+  }
+}
+
+// A chain vertex of three quads where the region is straight counts as an irregular vertex
+// in the search (two quads are regular there), so that the dislocation it ends can glide
+// into singularities a few rows in. On the 9 × 9 cage, the edge between (2, 1) and (3, 1)
+// rotated onto chain vertex (2, 0) and the 3–5 pair it leaves glided three rows away, to a
+// 3 at (6, 4) and a 5 at (6, 5) that a +1 and a −1 singularity there explain, leave the
+// 3 at (2, 1) the only unexplained vertex. Counting interior vertices alone, every way
+// back passes through more unexplained vertices than that one (the pair off its
+// singularities), and nothing is made; counting the chain vertex too, the way back leaves
+// as many until the pair meets the singularities, and the grid is regular again.
+TEST(Quad, ABoundaryDislocationGlidesIntoTheSingularitiesAFewRowsIn) {
+  const FlatChecks square(41, 0.2);  // the square [0, 8]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
+  const int m = 9;
+  auto at = [&](int x, int y) { return y * m + x; };
+  QuadCage cage = regular_flat_cage(m);
+  rotate_edge(cage, at(2, 1), at(3, 1), at(2, 0));
+  rotate_edge(cage, at(3, 2), at(4, 2), at(3, 1));
+  rotate_edge(cage, at(4, 3), at(5, 3), at(4, 2));
+  rotate_edge(cage, at(5, 4), at(6, 4), at(5, 3));
+  // Interior vertices evened out, the chain held.
+  std::vector<std::vector<int>> neighbours(cage.vertices.rows());
+  for (int q = 0; q < cage.quads.rows(); ++q)
+    for (int k = 0; k < 4; ++k) neighbours[cage.quads(q, k)].push_back(cage.quads(q, (k + 1) % 4));
+  const std::set<int> on_chain(cage.boundary_chains[0].begin(), cage.boundary_chains[0].end());
+  for (int sweep = 0; sweep < 500; ++sweep)
+    for (int v = 0; v < cage.vertices.rows(); ++v) {
+      if (on_chain.count(v)) continue;
+      Vec3 mean = Vec3::Zero();
+      for (int w : neighbours[v]) mean += cage.vertices.row(w).transpose();
+      cage.vertices.row(v) = (mean / static_cast<double>(neighbours[v].size())).transpose();
+    }
+  ASSERT_EQ(bad_flat_quads(cage), 0);
+  ASSERT_EQ(interior_valences(cage), (std::map<int, int>{{3, 2}, {4, 46}, {5, 1}}));
+  const std::vector<quad_detail::SingularPoint> singular = {
+      {cage.vertices.row(at(6, 4)).transpose(), 1}, {cage.vertices.row(at(6, 5)).transpose(), -1}};
+  ASSERT_EQ(quad_detail::irregular_off_singularities(checks, cage, singular, 1.0), 1);
+  const QuadCage before = cage;
+  quad_detail::PlaceSettings settings;  // as the quad stage's defaults (QuadOptions)
+  settings.draw_pairs_together = true;
+  settings.max_edits = 8;
+  settings.settle_rings = 2;
+  settings.settle_sweeps = 10;
+  EXPECT_GE(quad_detail::place_irregulars(checks, cage, singular, 1.0, 4, settings), 1);
+  EXPECT_EQ(quad_detail::irregular_off_singularities(checks, cage, singular, 1.0), 0);
+  EXPECT_EQ(interior_valences(cage), (std::map<int, int>{{4, 49}}));
+  EXPECT_EQ(bad_flat_quads(cage), 0);
+  // The chain keeps its vertices and their places (a collapse and a split renumber them).
+  ASSERT_EQ(cage.boundary_chains.size(), 1u);
+  ASSERT_EQ(cage.boundary_chains[0].size(), before.boundary_chains[0].size());
+  for (size_t i = 0; i < before.boundary_chains[0].size(); ++i)
+    EXPECT_EQ(cage.vertices.row(cage.boundary_chains[0][i]),
+              before.vertices.row(before.boundary_chains[0][i]))
+        << i;
+}
+
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four
 // curves, with a curve S across it at y = 2 and a separatrix leaving the left side at
 // y = 2.2 that joins S, the layout has three four-sided patches (below S, the strip
