@@ -501,8 +501,8 @@ void even_out_kept(const quad_detail::Surface& surface, const quad_detail::CageC
 // Measures a filled cage; squeezed or turned-over quads are untangled first, and that is
 // reported. A valid cage is then evened out (even_out_kept). With `singular`, irregular
 // vertices none of them explains are placed first (place_onto_singularities), and those
-// they explain are held in the evening out; where some are still unexplained after it, both
-// run again, up to QuadOptions::place_passes times.
+// they explain are held in the evening out, which runs QuadOptions::place_passes times;
+// the placing runs again before it while some are still unexplained.
 QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
@@ -547,10 +547,9 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
     }
   }
   for (int pass = 0; pass < std::max(1, options.place_passes); ++pass) {
-    if (pass > 0 && (!singular || !quad_detail::irregular_off_singularities(
-                                      checks, *cage, *singular, options.density)))
-      break;
-    if (singular)
+    if (pass > 0 && !singular) break;
+    if (singular && (pass == 0 || quad_detail::irregular_off_singularities(checks, *cage, *singular,
+                                                                           options.density)))
       place_onto_singularities(surface, checks, cage, &stats, messages, dropped, options,
                                *singular);
     even_out_kept(surface, checks, cage, &stats, messages, dropped, options, singular);

@@ -166,12 +166,15 @@ struct QuadOptions {
   // rest again. 48 conversions (bench/quad_judge; unexplained / oversized / skewed / s,
   // counted before squaring): off 33 / 1405 / 1287 / 443, on 31 / 1392 / 1286 / 456.
   bool hold_explained = true;
-  // How often the edits onto singularities (place_irregulars) and the evening out after
-  // them run on one reading's cage: again only while irregular vertices are left that no
-  // singularity explains (the evening out moves vertices, and with them what a window's
-  // search reaches and scores). 48 conversions (bench/quad_judge; unexplained / oversized /
-  // skewed / s): 1: 32 / 1392 / 1286 / 474; 2: 27 / 1251 / 1162 / 504; 3: 29 / 1257 / 1155 /
-  // 544.
+  // How often the evening out after the edits onto singularities (place_irregulars) runs
+  // on one reading's cage; the edits run again before it only while irregular vertices are
+  // left that no singularity explains (the evening out moves vertices, and with them what
+  // a window's search reaches and scores). 48 conversions (bench/quad_judge; unexplained /
+  // oversized / skewed / s): 1: 32 / 1392 / 1286 / 474; 2: 27 / 1251 / 1162 / 504; 3: 29 /
+  // 1257 / 1155 / 544 (both again only while some are left). With the evening out run
+  // twice on every cage, not only where some are left: 16 / 1248 / 1155 / 588 →
+  // 16 / 1097 / 1040 / 686 (until then a cage the edits left without unexplained vertices
+  // was evened out once, one with some left twice).
   int place_passes = 2;
   // A curve that ends at a singular vertex within this fraction of the separatrix spacing
   // of a direction no curve leaves it along yet (measured over a target edge length back
