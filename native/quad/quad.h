@@ -173,7 +173,7 @@ struct QuadOptions {
   // oversized / skewed / s): 1: 32 / 1392 / 1286 / 474; 2: 27 / 1251 / 1162 / 504; 3: 29 /
   // 1257 / 1155 / 544 (both again only while some are left). With the evening out run
   // twice on every cage, not only where some are left: 16 / 1248 / 1155 / 588 →
-  // 16 / 1097 / 1040 / 686 (until then a cage the edits left without unexplained vertices
+  // 16 / 1097 / 1040 / 588 (until then a cage the edits left without unexplained vertices
   // was evened out once, one with some left twice).
   int place_passes = 2;
   // A curve that ends at a singular vertex within this fraction of the separatrix spacing
