@@ -405,8 +405,8 @@ bool settle(const CageChecks& checks, State& s, int rings, int sweeps, std::vect
   moved->clear();
   for (int v : s.changed) {
     if (s.valence[v] == 0) continue;
-    for (int w : neighbours[v]) moving[w] = !s.fixed[w] && s.ring[w] <= kScoreRings;
-    moving[v] = 1;
+    for (int w : neighbours[v]) moving[w] |= !s.fixed[w] && s.ring[w] <= kScoreRings;
+    moving[v] |= !s.fixed[v];  // a chain vertex that shed a quad keeps its place
   }
   for (int r = 0; r < rings; ++r) {
     std::vector<char> wider = moving;
