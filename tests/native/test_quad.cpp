@@ -1648,17 +1648,7 @@ TEST(Quad, ABoundaryDislocationGlidesIntoTheSingularitiesAFewRowsIn) {
   rotate_edge(cage, at(4, 3), at(5, 3), at(4, 2));
   rotate_edge(cage, at(5, 4), at(6, 4), at(5, 3));
   // Interior vertices evened out, the chain held.
-  std::vector<std::vector<int>> neighbours(cage.vertices.rows());
-  for (int q = 0; q < cage.quads.rows(); ++q)
-    for (int k = 0; k < 4; ++k) neighbours[cage.quads(q, k)].push_back(cage.quads(q, (k + 1) % 4));
-  const std::set<int> on_chain(cage.boundary_chains[0].begin(), cage.boundary_chains[0].end());
-  for (int sweep = 0; sweep < 500; ++sweep)
-    for (int v = 0; v < cage.vertices.rows(); ++v) {
-      if (on_chain.count(v)) continue;
-      Vec3 mean = Vec3::Zero();
-      for (int w : neighbours[v]) mean += cage.vertices.row(w).transpose();
-      cage.vertices.row(v) = (mean / static_cast<double>(neighbours[v].size())).transpose();
-    }
+  quad_detail::relax_cage(checks, cage, 200, 0.5);
   ASSERT_EQ(bad_flat_quads(cage), 0);
   ASSERT_EQ(interior_valences(cage), (std::map<int, int>{{3, 2}, {4, 46}, {5, 1}}));
   const std::vector<quad_detail::SingularPoint> singular = {
