@@ -546,8 +546,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
       stats.collapsed_quads = folded;
     }
   }
-  for (int pass = 0; pass < std::max(1, options.place_passes); ++pass) {
-    if (pass > 0 && !singular) break;
+  const int passes = singular ? std::max(1, options.place_passes) : 1;
+  for (int pass = 0; pass < passes; ++pass) {
     if (singular && (pass == 0 || quad_detail::irregular_off_singularities(checks, *cage, *singular,
                                                                            options.density)))
       place_onto_singularities(surface, checks, cage, &stats, messages, dropped, options,
