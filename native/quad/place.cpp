@@ -7,9 +7,12 @@
 // one of the vertices the first changed; chain vertices keep their place and never gain a
 // quad, but one of three quads where the region is straight may lose one, and is counted
 // as irregular: shedding_chain_vertices), and where none helps every sequence of three
-// whose first two leave no more unexplained, and then (up to max_edits) one edit more at a time
-// after the kDeepPrefixes best sequences so far that leave no more unexplained (a 6 and a 3 beside
-// a −1 singularity can need four); of those leaving fewer unexplained vertices, the best few
+// whose first two leave at most `climb` more unexplained (PlaceSettings::climb), and then
+// (up to max_edits) one edit more at a time after the kDeepPrefixes best sequences so far
+// that leave no more unexplained, and as many of those that leave more, up to `climb` more
+// (a 6 and a 3 beside a −1 singularity can need four; a 6 or a 5 whose partner is three
+// edges away needs to pass through one more: an edit moves an irregular vertex only by
+// leaving a 3–5 pair behind); of those leaving fewer unexplained vertices, the best few
 // (fewest unexplained, then fewest irregular) are evened out in turn around their changed
 // vertices, and the first whose quads come out neither squeezed nor turned over is made.
 // Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
@@ -22,9 +25,9 @@
 // fewer (draw_pairs_together), and later rounds cancel them once they meet. The caller
 // opens squeezed quads and evens the whole cage out.
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
-// two edits do not help (pruned: the second must not add unexplained vertices), and
-// kDeepPrefixes × (edits in the window) more per edit beyond three; windows searched in
-// vain are not searched again until an edit touches them.
+// two edits do not help (pruned: the second must not add more than `climb` unexplained
+// vertices), and 2 × kDeepPrefixes × (edits in the window) more per edit beyond three;
+// windows searched in vain are not searched again until an edit touches them.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -52,7 +55,8 @@ constexpr size_t kKeptSequences = 6;
 // A chain vertex whose quads' corners sum to less than this (radians) may lose a quad.
 constexpr double kShedAngle = 225.0 * M_PI / 180.0;
 // Sequences of three edits or more taken on by one more where none helps (the best by
-// Score among those leaving no more unexplained vertices; PlaceSettings::max_edits).
+// Score among those leaving no more unexplained vertices, and as many among those leaving
+// up to PlaceSettings::climb more; PlaceSettings::max_edits).
 constexpr size_t kDeepPrefixes = 64;
 // Drawing pairs together (PlaceSettings::draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
@@ -439,6 +443,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings, const Dropped& dropped) {
   const int max_edits = settings.max_edits;
+  const int climb = settings.climb;
   int total = 0;
   // Vertices whose window was searched in vain and has not changed since: not again.
   std::vector<char> vain(cage.vertices.rows(), 0);
@@ -553,8 +558,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
       const std::vector<int> start = s.valence;  // the window's valences before any edit
       // Sequences of one or two edits; where none leaves fewer unexplained, of three whose
-      // first two leave no more than before (each edit after the first at the vertices the
-      // edits so far changed).
+      // first two leave at most `climb` more than before (each edit after the first at the
+      // vertices the edits so far changed).
       auto first_edit = [&](auto&& then) {
         for_each_edit(s, focus, [&] {
           // The first edit changes an irregular vertex.
@@ -583,31 +588,39 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       };
       // A sequence of three edits or more is kept if it helps, and it is among the
       // kDeepPrefixes best to take on by one more edit (where max_edits allows) if it
-      // leaves no more unexplained than before.
-      auto keep_prefix = [&](std::vector<std::pair<Score, State>>& prefixes) {
+      // leaves no more unexplained than before; or among the kDeepPrefixes best of those
+      // climbing (up to `climb` more), so that they are not crowded out by the level ones,
+      // which rank before them.
+      auto keep_prefix = [&](std::vector<std::pair<Score, State>>& prefixes,
+                             std::vector<std::pair<Score, State>>& climbing) {
         const Score now = score_now();
         keep(now);
         if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before))
           keep_best(prefixes, now, s, kDeepPrefixes);
+        else if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before) + climb)
+          keep_best(climbing, now, s, kDeepPrefixes);
       };
-      std::vector<std::pair<Score, State>> prefixes;
+      std::vector<std::pair<Score, State>> prefixes, climbing;
       if (max_edits >= 3 && !fewer())
         first_edit([&] {
           next_edit([&] {
-            if (std::get<0>(score_now()) <= std::get<0>(before))
-              next_edit([&] { keep_prefix(prefixes); });
+            if (std::get<0>(score_now()) <= std::get<0>(before) + climb)
+              next_edit([&] { keep_prefix(prefixes, climbing); });
           });
         });
       // Where those do not help either, one edit more at a time after each of the
       // prefixes, up to max_edits.
-      for (int edits = 4; edits <= max_edits && !fewer() && !prefixes.empty(); ++edits) {
-        std::vector<std::pair<Score, State>> longer;
-        for (auto& prefix : prefixes) {
-          std::swap(s, prefix.second);
-          next_edit([&] { keep_prefix(longer); });
-          std::swap(s, prefix.second);
-        }
+      for (int edits = 4;
+           edits <= max_edits && !fewer() && (!prefixes.empty() || !climbing.empty()); ++edits) {
+        std::vector<std::pair<Score, State>> longer, longer_climbing;
+        for (auto* pool : {&prefixes, &climbing})
+          for (auto& prefix : *pool) {
+            std::swap(s, prefix.second);
+            next_edit([&] { keep_prefix(longer, longer_climbing); });
+            std::swap(s, prefix.second);
+          }
         prefixes = std::move(longer);
+        climbing = std::move(longer_climbing);
       }
       // The first whose quads, evened out around the changed vertices, are not squeezed or
       // turned over.

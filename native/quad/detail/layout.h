@@ -575,6 +575,9 @@ struct PlaceSettings {
   // if it brings them nearer to ones of opposite sign (QuadOptions::draw_pairs_together).
   bool draw_pairs_together = false;
   int max_edits = 3;      // the longest sequence tried (QuadOptions::place_edits)
+  // How many more unexplained vertices than before a sequence of two edits or more may
+  // leave on its way to leaving fewer (QuadOptions::place_climb).
+  int climb = 0;
   int settle_rings = 0;   // rings evened out beyond the changed vertices' neighbours
   int settle_sweeps = 3;  // sweeps of that evening out
 };
