@@ -56,7 +56,8 @@ constexpr size_t kKeptSequences = 6;
 constexpr double kShedAngle = 225.0 * M_PI / 180.0;
 // Sequences of three edits or more taken on by one more where none helps (the best by
 // Score among those leaving no more unexplained vertices, and as many among those leaving
-// up to PlaceSettings::climb more; PlaceSettings::max_edits).
+// up to PlaceSettings::climb more; PlaceSettings::max_edits). 48 conversions with 16
+// climbing instead of 64: 14 unexplained against 8, 641 s against 649.
 constexpr size_t kDeepPrefixes = 64;
 // Drawing pairs together (PlaceSettings::draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
