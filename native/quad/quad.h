@@ -153,9 +153,10 @@ struct QuadOptions {
   // (a 3) is a few edges away can only be brought to it through one more: an edit moves an
   // irregular vertex only by leaving a 3–5 pair behind. 48 conversions (bench/quad_judge;
   // unexplained / oversized / skewed / s): 0: 16 / 1097 / 1036 / 588; 1: 8 / 1119 / 1054 /
-  // 621; 1, with each chosen sequence scored again once evened out (kept only if still
-  // fewer): 33 / 1107 / 1046. Over the 47 without genus 64 at h 0.14: 0: 15 / 988 / 973;
-  // 1: 8 / 1012 / 991; 2: 10 / 960 / 943, the genus-49 nets 2-3x slower (46-60 s → 100-164 s).
+  // 649. Scratch runs over the same 48's report.json: 1, with each chosen sequence scored
+  // again once evened out (kept only if still fewer): 33 / 1107 / 1046. Over the 47
+  // without genus 64 at h 0.14: 0: 15 / 988 / 973; 1: 8 / 1012 / 991; 2: 10 / 960 / 943,
+  // the genus-49 nets 2-3x slower (46-60 s → 100-164 s).
   int place_climb = 1;
   // Where a sequence of those edits is tried on the cage, the vertices it changed, their
   // neighbours and settle_rings rings more are evened out (settle_sweeps sweeps, each
