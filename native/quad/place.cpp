@@ -12,9 +12,13 @@
 // that leave no more unexplained, and as many of those that leave more, up to `climb` more
 // (a 6 and a 3 beside a −1 singularity can need four; a 6 or a 5 whose partner is three
 // edges away needs to pass through one more: an edit moves an irregular vertex only by
-// leaving a 3–5 pair behind); of those leaving fewer unexplained vertices, the best few
-// (fewest unexplained, then fewest irregular) are evened out in turn around their changed
-// vertices, and the first whose quads come out neither squeezed nor turned over is made.
+// leaving a 3–5 pair behind; where a round makes no edit, every window is searched again
+// climbing by one more, up to PlaceSettings::climb_last); of those leaving fewer
+// unexplained vertices, the best few (fewest unexplained, then fewest irregular) are
+// evened out in turn around their changed vertices, and the first whose quads come out
+// neither squeezed nor turned over is made. A window counts, beside its own vertices, the
+// cage's irregular vertices beyond it that its singularities can explain (rivals_of), as
+// the cage's count does.
 // Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
 // (a dislocation: the singular vertex one edge off); one edit rarely mends them, two often
 // do (genus-36 net at h 0.12: a search of the cage found 2 of 49 with one edit, 25 with
@@ -27,7 +31,9 @@
 // Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
 // two edits do not help (pruned: the second must not add more than `climb` unexplained
 // vertices), and 2 × kDeepPrefixes × (edits in the window) more per edit beyond three;
-// windows searched in vain are not searched again until an edit touches them.
+// windows searched in vain are not searched again until an edit touches them (or the
+// climb is raised), nor windows whose count finds none unexplained; rivals: O(irregular)
+// per window.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -319,10 +325,16 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
 // `explains`: per window vertex, the singularities near enough to explain it where it was,
 // at `start_point` (a vertex an edit moved is looked up again).
 using Score = std::tuple<int, int, double>;
+// Irregular vertices outside what a window scores that compete for its singularities
+// (rivals_of), with the singularities that can explain each (indices into the window's).
+struct Rivals {
+  std::vector<Irregular> vertices;
+  std::vector<std::vector<Explaining>> explains;
+};
 Score score(const State& s, const std::vector<SingularPoint>& singular,
             const std::vector<int>& scored, size_t window_vertices,
             const std::vector<std::vector<Explaining>>& explains,
-            const std::vector<Vec3>& start_point, bool spread) {
+            const std::vector<Vec3>& start_point, const Rivals& rivals, bool spread) {
   thread_local std::vector<Irregular> irregular;
   thread_local std::vector<Explaining> pairs;
   thread_local std::vector<int> left;
@@ -343,12 +355,18 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
   };
   for (int v : scored) add(v);
   for (size_t v = window_vertices; v < s.valence.size(); ++v) add(static_cast<int>(v));
+  const size_t own = irregular.size();
+  for (size_t r = 0; r < rivals.vertices.size(); ++r) {
+    const int entry = static_cast<int>(irregular.size());
+    irregular.push_back(rivals.vertices[r]);
+    for (const Explaining& x : rivals.explains[r]) pairs.push_back({x.distance, entry, x.point});
+  }
   match_pairs(pairs, irregular, singular, &left);
   double apart = 0;
-  for (size_t i = 0; spread && i < irregular.size(); ++i) {
+  for (size_t i = 0; spread && i < own; ++i) {
     if (!left[i]) continue;
     double nearest = kPairSpreadCap;
-    for (size_t j = 0; j < irregular.size(); ++j)
+    for (size_t j = 0; j < own; ++j)
       if (left[j] * left[i] < 0)
         nearest = std::min(nearest, (irregular[i].point - irregular[j].point).norm() /
                                         std::max(irregular[i].reach, 1e-12));
@@ -383,6 +401,40 @@ std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncide
     shed[v] = angle < kShedAngle;
   }
   return shed;
+}
+
+// The cage's irregular vertices a window does not score (`scored_vertex` false: outside it,
+// or beyond kScoreRings, where no edit reaches) that one of the window's singularities
+// `near` (within `extent` of `centre`) can explain, with the singularities that can explain
+// them, which are appended to `near` where missing (`near_id`: per singularity, its index
+// in `near` or −1). The cage's matching gives each singularity to the nearest vertex first,
+// wherever it is; a window that leaves these out finds its vertex explained by a
+// singularity a nearer vertex a strut or a few rings away takes (a vertex of long edges
+// beside a junction's cluster of −1 singularities), and does not search.
+template <class Scored>
+Rivals rivals_of(const std::vector<Irregular>& irregular,
+                 const std::vector<SingularPoint>& singular, const Vec3& centre, double extent,
+                 Scored scored_vertex, std::vector<SingularPoint>* near,
+                 std::vector<int>* near_id) {
+  Rivals rivals;
+  for (size_t f = 0; f < irregular.size(); ++f) {
+    const Irregular& x = irregular[f];
+    if (scored_vertex(x.vertex) || (x.point - centre).norm() > extent + x.reach) continue;
+    std::vector<Explaining> pairs;
+    explaining_pairs(x, -1, singular, &pairs);
+    if (std::none_of(pairs.begin(), pairs.end(),
+                     [&](const Explaining& p) { return (*near_id)[p.point] >= 0; }))
+      continue;
+    for (Explaining& p : pairs) {
+      int& id = (*near_id)[p.point];
+      if (id < 0) id = static_cast<int>(near->size()), near->push_back(singular[p.point]);
+      p.point = id;
+    }
+    // Ids apart from the window's local ones (ties between equal distances go by id).
+    rivals.vertices.push_back({-1 - static_cast<int>(f), x.carries, x.point, x.reach});
+    rivals.explains.push_back(std::move(pairs));
+  }
+  return rivals;
 }
 
 // Puts `s` into `best` (sorted by score, best first) if it is among the `limit` best.
@@ -444,7 +496,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings, const Dropped& dropped) {
   const int max_edits = settings.max_edits;
-  const int climb = settings.climb;
+  // Raised by one (up to settings.climb_last) where a round makes no edit.
+  int climb = settings.climb;
   int total = 0;
   // Vertices whose window was searched in vain and has not changed since: not again.
   std::vector<char> vain(cage.vertices.rows(), 0);
@@ -530,8 +583,22 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       for (size_t l = 0; l < s.point.size(); ++l)
         extent = std::max(extent, (s.point[l] - centre).norm() + s.reach[l]);
       std::vector<SingularPoint> near;
-      for (const auto& point : singular)
-        if ((point.point - centre).norm() <= extent) near.push_back(point);
+      std::vector<int> near_id(singular.size(), -1);
+      for (size_t i = 0; i < singular.size(); ++i)
+        if ((singular[i].point - centre).norm() <= extent)
+          near_id[i] = static_cast<int>(near.size()), near.push_back(singular[i]);
+      Rivals rivals;
+      if (settings.rivals) {
+        std::vector<char> is_scored(s.valence.size(), 0);
+        for (int l : scored) is_scored[l] = 1;
+        rivals = rivals_of(
+            irregular, singular, centre, extent,
+            [&](int v) {
+              const auto it = local.find(v);
+              return it != local.end() && is_scored[it->second];
+            },
+            &near, &near_id);
+      }
       const std::vector<Vec3> start_point = s.point;
       std::vector<std::vector<Explaining>> explains(s.valence.size());
       for (size_t l = 0; l < explains.size(); ++l)
@@ -541,10 +608,16 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       // unexplained vertices (or as many, no more irregular ones, drawn kPairCloser nearer
       // to ones of opposite sign) are kept, best first.
       auto score_now = [&] {
-        return score(s, near, scored, window_vertices, explains, start_point,
+        return score(s, near, scored, window_vertices, explains, start_point, rivals,
                      settings.draw_pairs_together);
       };
       const Score before = score_now();
+      // Where the window's count finds none unexplained, no sequence can leave fewer or draw
+      // a pair nearer: not searched.
+      if (std::get<0>(before) == 0) {
+        searched.push_back({irregular[e].vertex, std::move(global)});
+        continue;
+      }
       std::vector<std::pair<Score, State>> kept;
       auto keep = [&](const Score& now) {
         const auto [off, irregular_now, apart] = now;
@@ -654,6 +727,12 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       for (int q : window_quads)
         for (int k = 0; k < 4; ++k) locked[cage.quads(q, k)] = 1;
       ++now;
+    }
+    // Where a round makes no edit, every window is searched again climbing by one more.
+    if (!now && climb < settings.climb_last) {
+      ++climb;
+      std::fill(vain.begin(), vain.end(), 0);
+      continue;
     }
     if (!now) break;
     total += now;

@@ -426,8 +426,8 @@ QuadCage evened_out(const quad_detail::CageChecks& checks, const QuadCage& cage,
 // Irregular vertices beside a singularity of `singular` that does not explain them (a −1
 // singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by
 // local edits (place_irregulars, as `options` says: density, draw_pairs_together,
-// place_edits, place_climb, settle_rings, settle_sweeps); kept in *cage and *stats if the cage
-// stays valid with fewer such vertices.
+// place_edits, place_climb, place_climb_last, place_rivals, settle_rings, settle_sweeps);
+// kept in *cage and *stats if the cage stays valid with fewer such vertices.
 void place_onto_singularities(const quad_detail::Surface& surface,
                               const quad_detail::CageChecks& checks, QuadCage* cage,
                               QuadStats* stats, quad_detail::Messages* messages,
@@ -439,6 +439,8 @@ void place_onto_singularities(const quad_detail::Surface& surface,
   settings.draw_pairs_together = options.draw_pairs_together;
   settings.max_edits = options.place_edits;
   settings.climb = options.place_climb;
+  settings.climb_last = options.place_climb_last;
+  settings.rivals = options.place_rivals;
   settings.settle_rings = options.settle_rings;
   settings.settle_sweeps = options.settle_sweeps;
   const int windows = quad_detail::place_irregulars(checks, placed, singular, density, kPlaceRounds,

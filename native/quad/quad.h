@@ -158,6 +158,22 @@ struct QuadOptions {
   // without genus 64 at h 0.14: 0: 15 / 988 / 973; 1: 8 / 1012 / 991; 2: 10 / 960 / 943,
   // the genus-49 nets 2-3x slower (46-60 s → 100-164 s).
   int place_climb = 1;
+  // Where a round of those edits makes none, every window is searched again climbing by
+  // one more, up to place_climb_last: the cost of climbing higher only where nothing else
+  // moves. With place_rivals, 48 conversions (scratch runs with --field-obj, sums over
+  // report.json; unexplained / oversized / skewed / wall s): 1: 7 / 1084 / 1055 / 556;
+  // 2: 3 / 1084 / 1050 / 588. Climbing to 3 in the last rounds, or 10 edits there: no
+  // fewer on the four conversions that kept some.
+  int place_climb_last = 2;
+  // Each window counts, beside its own vertices, the cage's irregular vertices beyond it
+  // that its singularities can explain: the cage's matching gives a singularity to the
+  // nearest vertex wherever it is, and a window that leaves them out finds a vertex of long
+  // edges by a junction's cluster of −1 singularities explained by one that a nearer vertex
+  // a few rings away, or across a strut, takes, and never searches it (the genus-49 net at
+  // h 0.11: 32 such windows). The same 48, with place_climb_last 2: without them 6 / 1116
+  // / 1051 / 516 s, with them 3 / 1084 / 1050 / 588 s (8 / 1119 / 1054 / 526 s before
+  // either).
+  bool place_rivals = true;
   // Where a sequence of those edits is tried on the cage, the vertices it changed, their
   // neighbours and settle_rings rings more are evened out (settle_sweeps sweeps, each
   // vertex to the mean of its neighbours) before its quads are judged (squeezed or turned

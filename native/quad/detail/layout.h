@@ -578,6 +578,12 @@ struct PlaceSettings {
   // How many more unexplained vertices than before a sequence of two edits or more may
   // leave on its way to leaving fewer (QuadOptions::place_climb).
   int climb = 0;
+  // Where a round of edits makes none, every window is searched again climbing by one
+  // more, up to this (QuadOptions::place_climb_last).
+  int climb_last = 0;
+  // Windows count the cage's irregular vertices beyond them that compete for their
+  // singularities (QuadOptions::place_rivals).
+  bool rivals = false;
   int settle_rings = 0;   // rings evened out beyond the changed vertices' neighbours
   int settle_sweeps = 3;  // sweeps of that evening out
 };
@@ -593,8 +599,11 @@ struct PlaceSettings {
 // neighbours and `settings.settle_rings` rings more move, `settings.settle_sweeps` times
 // each to the mean of its neighbours, onto the component; a dislocation cancelled against a
 // singular vertex shifts rows a few edges wide, whose quads one ring cannot open). Windows
-// edited in one round are disjoint; at most `max_rounds` rounds. The caller opens squeezed
-// quads and checks the cage. Returns the windows edited (0: the cage is unchanged).
+// edited in one round are disjoint; at most `max_rounds` rounds (where one makes no edit,
+// the next searches every window again climbing by one more, up to settings.climb_last).
+// A window counts the cage's irregular vertices beyond it that compete for its
+// singularities (settings.rivals). The caller opens squeezed quads and checks the cage.
+// Returns the windows edited (0: the cage is unchanged).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings = PlaceSettings(),
