@@ -323,7 +323,8 @@ void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
 // then with `spread` how far the unexplained ones are from one of opposite sign (in reaches,
 // each up to kPairSpreadCap, summed; 0 without).
 // `explains`: per window vertex, the singularities near enough to explain it where it was,
-// at `start_point` (a vertex an edit moved is looked up again).
+// at `start_point` (a vertex an edit moved is looked up again). `rivals` take part in the
+// matching and both counts as they stand, not in `spread`.
 using Score = std::tuple<int, int, double>;
 // Irregular vertices outside what a window scores that compete for its singularities
 // (rivals_of), with the singularities that can explain each (indices into the window's).

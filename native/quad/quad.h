@@ -162,8 +162,9 @@ struct QuadOptions {
   // one more, up to place_climb_last: the cost of climbing higher only where nothing else
   // moves. With place_rivals, 48 conversions (scratch runs with --field-obj, sums over
   // report.json; unexplained / oversized / skewed / wall s): 1: 7 / 1084 / 1055 / 556;
-  // 2: 3 / 1084 / 1050 / 588. Climbing to 3 in the last rounds, or 10 edits there: no
-  // fewer on the four conversions that kept some.
+  // 2: 3 / 1084 / 1050 / 588. Without place_rivals, climbing to 3 in the last rounds, or
+  // 10 edits there, left no fewer than climbing to 2 on the four conversions that kept
+  // some.
   int place_climb_last = 2;
   // Each window counts, beside its own vertices, the cage's irregular vertices beyond it
   // that its singularities can explain: the cage's matching gives a singularity to the
