@@ -1845,8 +1845,9 @@ TEST(Quad, CornersChosenTogetherLeaveFewerIrregularVerticesOffSingularities) {
 // off: with them drawing pairs together leaves 5 off, as placing alone does), and place
 // with sequences of at most three edits (place_edits 3: with today's eight, drawing pairs
 // together leaves 4 off and snapped arrivals 5, their skewed quads 85 and 13), none of them
-// passing through more unexplained vertices (place_climb 0: climbing by one, both leave 2).
-// One scene for the four runs.
+// passing through more unexplained vertices (place_climb 0: climbing by one, both leave 2;
+// nor in the last rounds, place_climb_last 0), windows not counting the vertices beyond
+// them (place_rivals off). One scene for the four runs.
 TEST(Quad, IrregularVerticesArePlacedOnANet) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.12, 4)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1867,6 +1868,8 @@ TEST(Quad, IrregularVerticesArePlacedOnANet) {
           o.kink_nodes = false;
           o.place_edits = 3;
           o.place_climb = 0;
+          o.place_climb_last = 0;
+          o.place_rivals = false;
           if (!runs[k].arrivals) o.arrival_snap = 0, o.arrival_chord = false;
         },
         runs[k].label);
@@ -1915,7 +1918,9 @@ TEST(Quad, LongerSequencesOfEditsPlaceWhatThreeCannot) {
 // only by leaving a 3–5 pair behind, so every sequence that brings them together passes
 // through one more unexplained vertex than it starts with. Letting a sequence climb by one
 // on its way (QuadOptions::place_climb) leaves fewer irregular vertices off singularities
-// (measured: 3 → 2), the cage valid and within the targets.
+// (measured: 3 → 2), the cage valid and within the targets. The last rounds climb no
+// higher and windows do not count the vertices beyond them (place_climb_last,
+// place_rivals), as when measured.
 TEST(Quad, SequencesThatPassThroughOneMoreUnexplainedVertexPlaceWhatLevelOnesCannot) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.165, 3)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -1923,7 +1928,12 @@ TEST(Quad, SequencesThatPassThroughOneMoreUnexplainedVertexPlaceWhatLevelOnesCan
   for (int k = 0; k < 2; ++k) {
     const int climb = k == 0 ? 0 : QuadOptions{}.place_climb;
     off[k] = requested_off_singularities(
-        r, field, [&](QuadOptions& o) { o.place_climb = climb; },
+        r, field,
+        [&](QuadOptions& o) {
+          o.place_climb = climb;
+          o.place_climb_last = climb;
+          o.place_rivals = false;
+        },
         "net 3x3 at h 0.165, climbing by " + std::to_string(climb));
   }
   EXPECT_GT(QuadOptions{}.place_climb, 0);
@@ -2779,8 +2789,9 @@ TEST(Quad, ALargeComponentComparesItsRequestedLayoutWithItsArrivalsFlipped) {
 // the density raise of when this was measured (vertices_per_singular_quarter 50),
 // without kink nodes (QuadOptions::kink_nodes), without holding explained vertices
 // (hold_explained) and with edits judged after one ring is evened out in 3 sweeps
-// (settle_rings 0, settle_sweeps 3), and with no sequence of edits passing through more
-// unexplained vertices (place_climb 0): at today's 35, or with kink nodes, the first
+// (settle_rings 0, settle_sweeps 3), with no sequence of edits passing through more
+// unexplained vertices (place_climb 0, place_climb_last 0) and windows not counting the
+// vertices beyond them (place_rivals off): at today's 35, or with kink nodes, the first
 // reading there leaves none, and nothing is read again; holding, both readings leave 5;
 // with two rings more and 10 sweeps, 4; with 10 sweeps alone, 6; climbing by one, both 4.
 TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
@@ -2793,6 +2804,8 @@ TEST(Quad, NodesNearIrregularVerticesOffSingularitiesAreReadAgain) {
   options.settle_rings = 0;
   options.settle_sweeps = 3;
   options.place_climb = 0;
+  options.place_climb_last = 0;
+  options.place_rivals = false;
   QuadOptions once = options;
   once.off_node_price = 0;
   const QuadResult first = extract_cages(r.mesh, r.partition, field, once, Context());
