@@ -173,16 +173,19 @@ void explaining_pairs(const Irregular& irregular, int entry,
 
 void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& irregular,
                  const std::vector<SingularPoint>& singular, std::vector<int>* carries) {
+  std::sort(pairs.begin(), pairs.end(), [&](const Explaining& a, const Explaining& b) {
+    return pair_order(a, irregular[a.entry].vertex) < pair_order(b, irregular[b.entry].vertex);
+  });
+  carries->resize(irregular.size());
+  for (size_t e = 0; e < irregular.size(); ++e) (*carries)[e] = irregular[e].carries;
+  match_sorted_pairs(pairs, singular, carries);
+}
+
+void match_sorted_pairs(const std::vector<Explaining>& pairs,
+                        const std::vector<SingularPoint>& singular, std::vector<int>* carries) {
   thread_local std::vector<int> left;
   left.resize(singular.size());
   for (size_t i = 0; i < singular.size(); ++i) left[i] = std::abs(singular[i].index);
-  carries->resize(irregular.size());
-  for (size_t e = 0; e < irregular.size(); ++e) (*carries)[e] = irregular[e].carries;
-  // Nearest pairs first.
-  std::sort(pairs.begin(), pairs.end(), [&](const Explaining& a, const Explaining& b) {
-    return std::tie(a.distance, irregular[a.entry].vertex, a.point) <
-           std::tie(b.distance, irregular[b.entry].vertex, b.point);
-  });
   for (const Explaining& pair : pairs) {
     int& carried = (*carries)[pair.entry];
     const int explained = std::min(std::abs(carried), left[pair.point]);

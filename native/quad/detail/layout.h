@@ -9,6 +9,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/cage.h"
@@ -498,11 +499,20 @@ struct Explaining {
 // Appends the singularities that can explain `irregular` (entry `entry`) to `pairs`.
 void explaining_pairs(const Irregular& irregular, int entry,
                       const std::vector<SingularPoint>& singular, std::vector<Explaining>* pairs);
-// irregular_off_singularities' matching of `pairs` (sorted here): nearest first, each
-// singularity explaining at most |index| quarter turns. Per entry of `irregular`, the
-// quarter turns left unexplained (0: explained), into `carries`.
+// The order the matching takes pairs in: nearest first, then by the entry's vertex
+// (`vertex`), then by singularity. No two pairs share a key.
+inline std::tuple<double, int, int> pair_order(const Explaining& pair, int vertex) {
+  return {pair.distance, vertex, pair.point};
+}
+// irregular_off_singularities' matching of `pairs` (sorted here by pair_order): nearest
+// first, each singularity explaining at most |index| quarter turns. Per entry of
+// `irregular`, the quarter turns left unexplained (0: explained), into `carries`.
 void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& irregular,
                  const std::vector<SingularPoint>& singular, std::vector<int>* carries);
+// The same with `pairs` already sorted, and `carries` holding, per entry, the quarter turns
+// it carries.
+void match_sorted_pairs(const std::vector<Explaining>& pairs,
+                        const std::vector<SingularPoint>& singular, std::vector<int>* carries);
 // The interior irregular vertices of `cage` (`incidence` its CageIncidence) as
 // irregular_off_singularities matches them, and per entry in `left` the quarter turns no
 // singularity explains.
