@@ -1,24 +1,25 @@
 // quad/place.cpp — irregular vertices the layout left beside the field's singularities are
 // edited onto them, or away (quad/quad.h step 4, after the pair cancelling of
 // untangle.cpp). Around each irregular vertex no singularity explains
-// (irregular_off_singularities' matching), every sequence of at most two edits — an edge
-// rotation, a diagonal collapse, a vertex split — in a window of a few rings is tried on
-// the window's connectivity alone (the first edit changing an irregular vertex, the second
-// one of the vertices the first changed; chain vertices keep their place and never gain a
-// quad, but one of three quads where the region is straight may lose one, and is counted
-// as irregular: shedding_chain_vertices), and where none helps every sequence of three
-// whose first two leave at most `climb` more unexplained (PlaceSettings::climb), and then
-// (up to max_edits) one edit more at a time after the kDeepPrefixes best sequences so far
-// that leave no more unexplained, and as many of those that leave more, up to `climb` more
-// (a 6 and a 3 beside a −1 singularity can need four; a 6 or a 5 whose partner is three
-// edges away needs to pass through one more: an edit moves an irregular vertex only by
-// leaving a 3–5 pair behind; where a round makes no edit, every window is searched again
-// climbing by one more, up to PlaceSettings::climb_last); of those leaving fewer
-// unexplained vertices, the best few (fewest unexplained, then fewest irregular) are
-// evened out in turn around their changed vertices, and the first whose quads come out
-// neither squeezed nor turned over is made. A window counts, beside its own vertices, the
-// cage's irregular vertices beyond it that its singularities can explain (rivals_of), as
-// the cage's count does.
+// (irregular_off_singularities' matching), and each chain vertex of three quads where its
+// loop is smooth (PlaceSettings::chain_vertices: no singularity explains one), every
+// sequence of at most two edits — an edge rotation, a diagonal collapse, a vertex split —
+// in a window of a few rings is tried on the window's connectivity alone (the first edit
+// changing an irregular vertex, the second one of the vertices the first changed; chain
+// vertices keep their place and never gain a quad, but one of three quads where the region
+// is straight may lose one, and is counted as irregular: shedding_chain_vertices), and
+// where none helps every sequence of three whose first two leave at most `climb` more
+// unexplained (PlaceSettings::climb), and then (up to max_edits) one edit more at a time
+// after the kDeepPrefixes best sequences so far that leave no more unexplained, and as
+// many of those that leave more, up to `climb` more (a 6 and a 3 beside a −1 singularity
+// can need four; a 6 or a 5 whose partner is three edges away needs to pass through one
+// more: an edit moves an irregular vertex only by leaving a 3–5 pair behind; where a round
+// makes no edit, every window is searched again climbing by one more, up to
+// PlaceSettings::climb_last); of those leaving fewer unexplained vertices, the best few
+// (fewest unexplained, then fewest irregular) are evened out in turn around their changed
+// vertices, and the first whose quads come out neither squeezed nor turned over is made. A
+// window counts, beside its own vertices, the cage's irregular vertices beyond it that its
+// singularities can explain (rivals_of), as the cage's count does.
 // Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
 // (a dislocation: the singular vertex one edge off); one edit rarely mends them, two often
 // do (genus-36 net at h 0.12: a search of the cage found 2 of 49 with one edit, 25 with
@@ -399,7 +400,9 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
 // alone places. The search counts it as irregular (carrying −1 with three quads): a
 // sequence that sheds its quad and glides the 3–5 pair this leaves a few rows in, until
 // it meets a singular vertex, passes through as many unexplained vertices as it started
-// with; counting interior vertices alone, it passes through one more and is cut off.
+// with; counting interior vertices alone, it passes through one more and is cut off. With
+// PlaceSettings::chain_vertices none explains it and it starts a window of its own: a −1
+// singularity a row or two in, drawn on the loop, goes inside onto it.
 std::vector<char> shedding_chain_vertices(const QuadCage& cage, const CageIncidence& incidence) {
   std::vector<char> crease(cage.vertices.rows(), 0);
   for (const auto& e : cage.crease_edges) crease[e[0]] = crease[e[1]] = 1;
@@ -513,6 +516,11 @@ bool settle(const CageChecks& checks, State& s, int rings, int sweeps, std::vect
 
 }  // namespace
 
+int chain_vertices_to_shed(const QuadCage& cage) {
+  const std::vector<char> shed = shedding_chain_vertices(cage, CageIncidence(cage));
+  return static_cast<int>(std::count(shed.begin(), shed.end(), 1));
+}
+
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings, const Dropped& dropped) {
@@ -550,11 +558,19 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     int now = 0;
     // The vertices whose windows were searched in vain, and those windows' vertices.
     std::vector<std::pair<int, std::vector<int>>> searched;
-    for (size_t e = 0; e < irregular.size(); ++e) {
-      if (!left[e] || vain[irregular[e].vertex]) continue;
+    // Windows start at the unexplained vertices, then at the chain vertices that may shed a
+    // quad (settings.chain_vertices).
+    std::vector<int> starts;
+    for (size_t e = 0; e < irregular.size(); ++e)
+      if (left[e]) starts.push_back(irregular[e].vertex);
+    if (settings.chain_vertices)
+      for (int v = 0; v < nv; ++v)
+        if (shed[v]) starts.push_back(v);
+    for (const int start_vertex : starts) {
+      if (vain[start_vertex]) continue;
       dropped.check();
       // The window: rings around the vertex by breadth-first search.
-      std::vector<int> reached = {irregular[e].vertex};
+      std::vector<int> reached = {start_vertex};
       ring[reached[0]] = 0;
       for (size_t i = 0; i < reached.size(); ++i) {
         const int v = reached[i];
@@ -599,7 +615,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
           scored.push_back(static_cast<int>(l));
       const size_t window_vertices = s.valence.size();
       // The singularities that can explain a vertex of the window.
-      const Vec3 centre = irregular[e].point;
+      const Vec3 centre = cage.vertices.row(start_vertex).transpose();
       double extent = 0;
       for (size_t l = 0; l < s.point.size(); ++l)
         extent = std::max(extent, (s.point[l] - centre).norm() + s.reach[l]);
@@ -624,7 +640,9 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       std::vector<std::vector<Explaining>> explains(s.valence.size());
       for (size_t l = 0; l < explains.size(); ++l)
         for (int sign : {1, -1})  // either sign: what the vertex carries changes with edits
-          explaining_pairs({static_cast<int>(l), sign, s.point[l], s.reach[l]}, -1, near, &explains[l]);
+          if (!(settings.chain_vertices && s.shed[l]))  // none explains a chain vertex
+            explaining_pairs({static_cast<int>(l), sign, s.point[l], s.reach[l]}, -1, near,
+                             &explains[l]);
       // Of the sequences of edits tried, the kKeptSequences best that leave fewer
       // unexplained vertices (or as many, no more irregular ones, drawn kPairCloser nearer
       // to ones of opposite sign) are kept, best first.
@@ -636,7 +654,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       // Where the window's count finds none unexplained, no sequence can leave fewer or draw
       // a pair nearer: not searched.
       if (std::get<0>(before) == 0) {
-        searched.push_back({irregular[e].vertex, std::move(global)});
+        searched.push_back({start_vertex, std::move(global)});
         continue;
       }
       std::vector<std::pair<Score, State>> kept;
@@ -727,7 +745,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
           break;
         }
       if (!chosen) {
-        searched.push_back({irregular[e].vertex, std::move(global)});
+        searched.push_back({start_vertex, std::move(global)});
         continue;
       }
       const State& t = *chosen;

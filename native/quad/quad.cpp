@@ -444,6 +444,7 @@ void place_onto_singularities(const quad_detail::Surface& surface,
   settings.climb = options.place_climb;
   settings.climb_last = options.place_climb_last;
   settings.rivals = options.place_rivals;
+  settings.chain_vertices = options.place_chain_vertices;
   settings.settle_rings = options.settle_rings;
   settings.settle_sweeps = options.settle_sweeps;
   const int windows = quad_detail::place_irregulars(checks, placed, singular, density, kPlaceRounds,
@@ -454,14 +455,22 @@ void place_onto_singularities(const quad_detail::Surface& surface,
   const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
   const int placed_off =
       quad_detail::irregular_off_singularities(checks, placed, singular, density);
+  // Chain vertices of three quads on a smooth stretch (QuadOptions::place_chain_vertices).
+  const int shed = options.place_chain_vertices ? quad_detail::chain_vertices_to_shed(*cage) : 0;
+  const int placed_shed =
+      options.place_chain_vertices ? quad_detail::chain_vertices_to_shed(placed) : 0;
   std::string why;
-  if (!left && !placed_stats.flipped_quads && !placed_stats.degenerate_quads && placed_off < off &&
-      cage_is_manifold(placed, &why)) {
-    messages->notes.push_back("component " + std::to_string(surface.component) + ": " +
-                              std::to_string(windows) +
-                              " local edits moved irregular vertices onto the singularities "
-                              "beside them (away from singularities " +
-                              std::to_string(off) + " → " + std::to_string(placed_off) + ")");
+  if (!left && !placed_stats.flipped_quads && !placed_stats.degenerate_quads &&
+      placed_off + placed_shed < off + shed && cage_is_manifold(placed, &why)) {
+    messages->notes.push_back(
+        "component " + std::to_string(surface.component) + ": " + std::to_string(windows) +
+        " local edits moved irregular vertices onto the singularities beside them (away from "
+        "singularities " +
+        std::to_string(off) + " → " + std::to_string(placed_off) +
+        (shed || placed_shed ? "; chain vertices of three quads where two would do " +
+                                   std::to_string(shed) + " → " + std::to_string(placed_shed)
+                             : std::string()) +
+        ")");
     const int folded = stats->collapsed_quads;
     *cage = std::move(placed);
     *stats = placed_stats;
@@ -474,8 +483,12 @@ void place_onto_singularities(const quad_detail::Surface& surface,
          : placed_stats.flipped_quads || placed_stats.degenerate_quads
              ? std::to_string(placed_stats.flipped_quads + placed_stats.degenerate_quads) +
                    " quads flipped or degenerate"
-         : placed_off >= off ? "no fewer irregular vertices away from singularities"
-                             : "not a valid 2-manifold: " + why) +
+         : placed_off + placed_shed >= off + shed
+             ? "no fewer irregular vertices away from singularities" +
+                   std::string(options.place_chain_vertices
+                                   ? " and chain vertices of three quads where two would do"
+                                   : "")
+             : "not a valid 2-manifold: " + why) +
         ")");
   }
 }
@@ -554,8 +567,10 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
   }
   const int passes = singular ? std::max(1, options.place_passes) : 1;
   for (int pass = 0; pass < passes; ++pass) {
-    if (singular && (pass == 0 || quad_detail::irregular_off_singularities(checks, *cage, *singular,
-                                                                           options.density)))
+    if (singular &&
+        (pass == 0 ||
+         quad_detail::irregular_off_singularities(checks, *cage, *singular, options.density) ||
+         (options.place_chain_vertices && quad_detail::chain_vertices_to_shed(*cage))))
       place_onto_singularities(surface, checks, cage, &stats, messages, dropped, options,
                                *singular);
     even_out_kept(surface, checks, cage, &stats, messages, dropped, options, singular);

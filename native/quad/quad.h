@@ -175,6 +175,16 @@ struct QuadOptions {
   // / 1051 / 516 s, with them 3 / 1084 / 1050 / 588 s (8 / 1119 / 1054 / 526 s before
   // either).
   bool place_rivals = true;
+  // Chain vertices of three quads where their loop is smooth (a straight or convex stretch,
+  // where two quads would cover it) are moved off the loop by those edits like irregular
+  // vertices no singularity explains: each starts a window of its own, a singularity never
+  // explains it, and the cage is kept where the edits leave fewer of the two together. A
+  // −1 singularity a row or two in from the loop was otherwise drawn on the loop (a chain
+  // vertex of three quads, two of them squeezed), and nothing searched it: no interior
+  // vertex was left unexplained there. 48 conversions (scratch runs with --field-obj;
+  // unexplained / oversized / skewed / such chain vertices of 10360 / wall s): off 3 / 1084
+  // / 1050 / 8 / 476, on 3 / 1082 / 1038 / 0 / 521.
+  bool place_chain_vertices = true;
   // Where a sequence of those edits is tried on the cage, the vertices it changed, their
   // neighbours and settle_rings rings more are evened out (settle_sweeps sweeps, each
   // vertex to the mean of its neighbours) before its quads are judged (squeezed or turned

@@ -1983,6 +1983,35 @@ TEST(Quad, WhereARoundMakesNoEditWindowsAreSearchedAgainClimbingHigher) {
   EXPECT_LT(off[1], off[0]);
 }
 
+// A chain vertex of three quads where its loop runs straight is moved off the loop like an
+// unexplained vertex (QuadOptions::place_chain_vertices): on the net of genus 9 at h 0.105
+// the requested layout draws a −1 singularity a row or two in on the loop (a chain vertex
+// of three quads, two of them squeezed) with no interior vertex unexplained near it, so no
+// window was searched there; with chain vertices starting windows the −1 goes inside onto
+// its singularity and the loop's vertices are all of two quads (1 vertex elsewhere is
+// left unexplained either way, 97 → 96 irregular).
+TEST(Quad, ChainVerticesOfThreeQuadsOnAStraightStretchAreMovedOffTheLoop) {
+  const Partitioned r = relaxed(partition_scene(net_scene(0.105, 3)));
+  const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
+  int shed[2] = {0, 0}, off[2] = {0, 0}, valence3[2] = {0, 0};
+  for (const bool on : {false, true}) {
+    const QuadResult result = requested_net_cage(
+        r, field, [&](QuadOptions& o) { o.place_chain_vertices = on; },
+        on ? "net 3x3 at h 0.105, chain vertices moved"
+           : "net 3x3 at h 0.105, chain vertices left");
+    ASSERT_EQ(result.cages.size(), 1u);
+    shed[on] = quad_detail::chain_vertices_to_shed(result.cages[0]);
+    off[on] = result.stats[0].irregular_off_singularities;
+    valence3[on] = result.stats[0].boundary_valence3;
+    expect_off_singularities_listed(result);
+  }
+  EXPECT_TRUE(QuadOptions{}.place_chain_vertices);
+  EXPECT_GE(shed[0], 1);
+  EXPECT_EQ(shed[1], 0);
+  EXPECT_LE(off[1], off[0]);
+  EXPECT_GT(valence3[1], valence3[0]);
+}
+
 // On the net of genus 16 at h 0.11, the requested layout's evening out moves an irregular
 // vertex the edits left explained past its singularity's reach; held where it was, the
 // cage keeps it explained (1 → 0 irregular vertices off singularities), and the notes say

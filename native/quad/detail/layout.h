@@ -594,6 +594,9 @@ struct PlaceSettings {
   // Windows count the cage's irregular vertices beyond them that compete for their
   // singularities (QuadOptions::place_rivals).
   bool rivals = false;
+  // Chain vertices that may shed a quad start windows, and no singularity explains them
+  // (QuadOptions::place_chain_vertices).
+  bool chain_vertices = false;
   int settle_rings = 0;   // rings evened out beyond the changed vertices' neighbours
   int settle_sweeps = 3;  // sweeps of that evening out
 };
@@ -618,6 +621,10 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings = PlaceSettings(),
                      const Dropped& dropped = Dropped());
+// The chain vertices of `cage` of three quads or more where their loop is smooth (the
+// quads' corners at it sum to under 225°: two quads would cover it), which
+// place_irregulars may take a quad from.
+int chain_vertices_to_shed(const QuadCage& cage);
 // Rotates interior cage edges where that leaves fewer irregular vertices: the edge u–w
 // between quads (u, w, a, b) and (w, u, c, d) becomes c–a or d–b (u and w lose a quad, the
 // new ends gain one; all four interior, u and w keep ≥ 3 quads), the best gains first, no
