@@ -29,13 +29,14 @@
 // irregular vertices that draw them nearer each other are ranked too, after those leaving
 // fewer (draw_pairs_together), and later rounds cancel them once they meet. The caller
 // opens squeezed quads and evens the whole cage out.
-// Complexity: per unexplained vertex, (edits in the window)² window-sized steps, ³ where
-// two edits do not help (pruned: the second must not add more than `climb` unexplained
-// vertices), and 2 × kDeepPrefixes × (edits in the window) more per edit beyond three;
-// windows searched in vain are not searched again until an edit touches them (or the
-// climb is raised), nor windows whose count finds none unexplained; rivals: O(irregular)
-// per window, their pairs sorted once and merged into each step's (the genus-36 net at
-// h 0.135, alone on the machine: quad 63 → 43 s against sorting them all at each step).
+// Complexity: per unexplained vertex (and chain vertex that may shed a quad), (edits in the
+// window)² window-sized steps, ³ where two edits do not help (pruned: the second must not
+// add more than `climb` unexplained vertices), and 2 × kDeepPrefixes × (edits in the
+// window) more per edit beyond three; windows searched in vain are not searched again
+// until an edit touches them (or the climb is raised), nor windows whose count finds none
+// unexplained; rivals: O(irregular) per window, their pairs sorted once and merged into
+// each step's (the genus-36 net at h 0.135, alone on the machine: quad 63 → 43 s against
+// sorting them all at each step).
 #include <algorithm>
 #include <array>
 #include <cmath>

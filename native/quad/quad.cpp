@@ -429,8 +429,10 @@ QuadCage evened_out(const quad_detail::CageChecks& checks, const QuadCage& cage,
 // Irregular vertices beside a singularity of `singular` that does not explain them (a −1
 // singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by
 // local edits (place_irregulars, as `options` says: density, draw_pairs_together,
-// place_edits, place_climb, place_climb_last, place_rivals, settle_rings, settle_sweeps);
-// kept in *cage and *stats if the cage stays valid with fewer such vertices.
+// place_edits, place_climb, place_climb_last, place_rivals, place_chain_vertices,
+// settle_rings, settle_sweeps); kept in *cage and *stats if the cage stays valid with fewer
+// such vertices (with place_chain_vertices, such vertices and chain vertices of three quads
+// where two would do, together).
 void place_onto_singularities(const quad_detail::Surface& surface,
                               const quad_detail::CageChecks& checks, QuadCage* cage,
                               QuadStats* stats, quad_detail::Messages* messages,
