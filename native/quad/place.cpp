@@ -365,8 +365,7 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
   // The window's own pairs sorted, merged with the rivals' (after them in `left`): the
   // order match_pairs would sort them all into.
   auto own_order = [&](const Explaining& x) { return pair_order(x, irregular[x.entry].vertex); };
-  std::sort(own_pairs.begin(), own_pairs.end(),
-            [&](const Explaining& a, const Explaining& b) { return own_order(a) < own_order(b); });
+  sort_pairs(own_pairs, [&](int entry) { return irregular[entry].vertex; });
   auto o = own_pairs.begin();
   for (const Explaining& x : rivals.pairs) {
     const auto rival_order = pair_order(x, rivals.vertices[x.entry].vertex);
@@ -448,17 +447,13 @@ Rivals rivals_of(const std::vector<Irregular>& irregular,
       int& id = (*near_id)[p.point];
       if (id < 0) id = static_cast<int>(near->size()), near->push_back(singular[p.point]);
       p.point = id;
+      p.entry = static_cast<int>(rivals.vertices.size());
     }
-    for (Explaining& p : pairs) p.entry = static_cast<int>(rivals.vertices.size());
     // Ids apart from the window's local ones (ties between equal distances go by id).
     rivals.vertices.push_back({-1 - static_cast<int>(f), x.carries, x.point, x.reach});
     rivals.pairs.insert(rivals.pairs.end(), pairs.begin(), pairs.end());
   }
-  std::sort(rivals.pairs.begin(), rivals.pairs.end(),
-            [&](const Explaining& a, const Explaining& b) {
-              return pair_order(a, rivals.vertices[a.entry].vertex) <
-                     pair_order(b, rivals.vertices[b.entry].vertex);
-            });
+  sort_pairs(rivals.pairs, [&](int entry) { return rivals.vertices[entry].vertex; });
   return rivals;
 }
 

@@ -173,9 +173,7 @@ void explaining_pairs(const Irregular& irregular, int entry,
 
 void match_pairs(std::vector<Explaining>& pairs, const std::vector<Irregular>& irregular,
                  const std::vector<SingularPoint>& singular, std::vector<int>* carries) {
-  std::sort(pairs.begin(), pairs.end(), [&](const Explaining& a, const Explaining& b) {
-    return pair_order(a, irregular[a.entry].vertex) < pair_order(b, irregular[b.entry].vertex);
-  });
+  sort_pairs(pairs, [&](int entry) { return irregular[entry].vertex; });
   carries->resize(irregular.size());
   for (size_t e = 0; e < irregular.size(); ++e) (*carries)[e] = irregular[e].carries;
   match_sorted_pairs(pairs, singular, carries);
@@ -426,6 +424,12 @@ QuadCage evened_out(const quad_detail::CageChecks& checks, const QuadCage& cage,
   return relaxed;
 }
 
+// The chain vertices of three quads on a smooth stretch of their loop the edits onto
+// singularities move off it (QuadOptions::place_chain_vertices; 0 without).
+int chain_vertices_left(const QuadCage& cage, const QuadOptions& options) {
+  return options.place_chain_vertices ? quad_detail::chain_vertices_to_shed(cage) : 0;
+}
+
 // Irregular vertices beside a singularity of `singular` that does not explain them (a −1
 // singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it) are moved onto it by
 // local edits (place_irregulars, as `options` says: density, draw_pairs_together,
@@ -457,10 +461,8 @@ void place_onto_singularities(const quad_detail::Surface& surface,
   const QuadStats placed_stats = quad_detail::measure_cage(placed, checks);
   const int placed_off =
       quad_detail::irregular_off_singularities(checks, placed, singular, density);
-  // Chain vertices of three quads on a smooth stretch (QuadOptions::place_chain_vertices).
-  const int shed = options.place_chain_vertices ? quad_detail::chain_vertices_to_shed(*cage) : 0;
-  const int placed_shed =
-      options.place_chain_vertices ? quad_detail::chain_vertices_to_shed(placed) : 0;
+  const int shed = chain_vertices_left(*cage, options);
+  const int placed_shed = chain_vertices_left(placed, options);
   std::string why;
   if (!left && !placed_stats.flipped_quads && !placed_stats.degenerate_quads &&
       placed_off + placed_shed < off + shed && cage_is_manifold(placed, &why)) {
@@ -572,7 +574,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
     if (singular &&
         (pass == 0 ||
          quad_detail::irregular_off_singularities(checks, *cage, *singular, options.density) ||
-         (options.place_chain_vertices && quad_detail::chain_vertices_to_shed(*cage))))
+         chain_vertices_left(*cage, options)))
       place_onto_singularities(surface, checks, cage, &stats, messages, dropped, options,
                                *singular);
     even_out_kept(surface, checks, cage, &stats, messages, dropped, options, singular);

@@ -504,6 +504,13 @@ void explaining_pairs(const Irregular& irregular, int entry,
 inline std::tuple<double, int, int> pair_order(const Explaining& pair, int vertex) {
   return {pair.distance, vertex, pair.point};
 }
+// Sorts `pairs` by pair_order, `vertex_of(entry)` giving each entry's vertex.
+template <class VertexOf>
+void sort_pairs(std::vector<Explaining>& pairs, VertexOf vertex_of) {
+  std::sort(pairs.begin(), pairs.end(), [&](const Explaining& a, const Explaining& b) {
+    return pair_order(a, vertex_of(a.entry)) < pair_order(b, vertex_of(b.entry));
+  });
+}
 // irregular_off_singularities' matching of `pairs` (sorted here by pair_order): nearest
 // first, each singularity explaining at most |index| quarter turns. Per entry of
 // `irregular`, the quarter turns left unexplained (0: explained), into `carries`.
