@@ -1330,26 +1330,48 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     best_squaring_tried = a.squaring_tried;
     best_messages = std::move(a.messages);
   };
-  auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
-                     const quad_detail::Dropped& dropped) {
+  // Choice k's second reading (read_off_nodes_again), where its first left irregular
+  // vertices away from singularities: off_node_share of them, or off_node_count.
+  auto wants_second_reading = [&](size_t k, const Attempt& a) {
+    const QuadOptions& o = variants[k].options;
+    const int off = a.stats.irregular_off_singularities;
+    return !a.error && o.off_node_price > 0 && off > 0 &&
+           (off >= o.off_node_share * a.stats.irregular_vertices ||
+            (o.off_node_count > 0 && off >= o.off_node_count));
+  };
+  auto read_again = [&](size_t k, Attempt* a, const quad_detail::Dropped& dropped) {
+    if (!wants_second_reading(k, *a)) return;
     try {
-      const QuadOptions& o = variants[k].options;
-      extract_once(inputs, o, seen, dropped, {}, a);
-      const int off = a->stats.irregular_off_singularities;
-      if (o.off_node_price > 0 && off > 0 &&
-          (off >= o.off_node_share * a->stats.irregular_vertices ||
-           (o.off_node_count > 0 && off >= o.off_node_count)))
-        read_off_nodes_again(inputs, o, dropped, a);
+      read_off_nodes_again(inputs, variants[k].options, dropped, a);
     } catch (...) {
       a->error = std::current_exception();
       a->dropped = dropped.stopped();
     }
   };
+  // Choice k's attempt: its first reading, and its second unless `first_only`.
+  auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
+                     const quad_detail::Dropped& dropped, bool first_only = false) {
+    try {
+      extract_once(inputs, variants[k].options, seen, dropped, {}, a);
+    } catch (...) {
+      a->error = std::current_exception();
+      a->dropped = dropped.stopped();
+      return;
+    }
+    if (!first_only) read_again(k, a, dropped);
+  };
+  // QuadOptions::pair_second_readings: the first batch holds the requested layout and its
+  // sibling, however many threads there are (not where the work allows the requested one
+  // only: work_per_component 0).
+  const bool pair_readings =
+      options.pair_second_readings && options.work_per_component > 0 && variants.size() >= 2;
   bool stop = false;
   for (size_t k = 0; k < variants.size() && !stop;) {
     if (out_of_work(k)) break;
     if (first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) break;
-    const size_t batch = std::min(variants.size() - k, static_cast<size_t>(threads));
+    const bool pair = pair_readings && k == 0;
+    const size_t batch =
+        std::min(variants.size() - k, static_cast<size_t>(pair ? std::max(threads, 2) : threads));
     std::vector<Attempt> attempts(batch);
     // The layouts seen before the batch, as every attempt of it reads them (the search
     // adds to seen_layouts while later attempts still run).
@@ -1369,12 +1391,48 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
           if (worker.joinable()) worker.join();
       }
     } join_all{drop, workers};
-    for (size_t i = 1; i < batch; ++i)
-      workers.emplace_back([&, i, first = k] {
-        attempt(first + i, seen_before, &attempts[i], quad_detail::Dropped(&drop));
+    // On one thread the pair's sibling runs after the requested layout, on this one.
+    for (size_t i = 1; i < batch && threads > 1; ++i)
+      workers.emplace_back([&, i, first = k, only = pair && i == 1] {
+        attempt(first + i, seen_before, &attempts[i], quad_detail::Dropped(&drop), only);
         quad_detail::release_quantize_thread();
       });
-    attempt(k, seen_before, &attempts[0], quad_detail::Dropped());
+    attempt(k, seen_before, &attempts[0], quad_detail::Dropped(), pair);
+    if (pair) {
+      // The pair's first readings, then their second readings (pair_second_readings).
+      if (threads > 1)
+        workers[0].join();
+      else
+        attempt(k + 1, seen_before, &attempts[1], quad_detail::Dropped(), true);
+      bool again[2];
+      for (int i : {0, 1}) {
+        const Attempt &a = attempts[i], &other = attempts[1 - i];
+        again[i] = wants_second_reading(k + i, a);
+        if (!again[i] || other.error || other.stats.irregular_off_singularities) continue;
+        // Beside one that left none: only where, with none left and the corner angles
+        // even, it would be kept over that one.
+        QuadStats none_left = a.stats;
+        none_left.irregular_off_singularities = 0;
+        none_left.mean_angle_deviation_deg = other.stats.mean_angle_deviation_deg;
+        again[i] = quad_detail::better_cage(none_left, meets_targets(a.stats), other.stats,
+                                            meets_targets(other.stats));
+        if (!again[i])
+          out->notes.push_back(
+              "component " + std::to_string(c) + ": " +
+              (i == 0 ? "the requested layout" : "the layout with " + variants[k + 1].what) +
+              " not read again: " +
+              (i == 0 ? "the layout with " + variants[k + 1].what : "the requested one") +
+              " left no irregular vertex away from singularities, and would be kept even if "
+              "a second reading left none (pair_second_readings)");
+      }
+      if (again[1] && threads > 1)
+        workers[0] = std::thread([&, first = k] {
+          read_again(first + 1, &attempts[1], quad_detail::Dropped(&drop));
+          quad_detail::release_quantize_thread();
+        });
+      if (again[0]) read_again(k, &attempts[0], quad_detail::Dropped());
+      if (again[1] && threads == 1) read_again(k + 1, &attempts[1], quad_detail::Dropped());
+    }
     // The batch's first cage needs squaring before it is judged, and would end the search
     // if it then meets the targets (no choice is tried after meeting): the others are
     // dropped and it is squared on every thread. If it still misses, the others that had
@@ -1387,7 +1445,7 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         stop = true;
         break;
       }
-      if (i > 0 && workers[i - 1].joinable()) workers[i - 1].join();
+      if (i > 0 && i - 1 < workers.size() && workers[i - 1].joinable()) workers[i - 1].join();
       Attempt& a = attempts[i];
       // Repeated layouts, as the sequential search sees them, and the work it would spend.
       bool grew = false, repeated = false;
@@ -1420,7 +1478,8 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
         int squaring_threads = i + 1 == batch ? threads : 1;  // the batch's others still run
         if (i == 0 && batch > 1 && first_meeting < 0 && choices_after_meeting == 0) {
           drop = true;
-          for (auto& worker : workers) worker.join();
+          for (auto& worker : workers)
+            if (worker.joinable()) worker.join();
           taken = 1;
           while (taken < batch && !attempts[taken].dropped) ++taken;
           squaring_threads = threads;

@@ -265,6 +265,16 @@ struct QuadOptions {
   // 3: 49, 1401, 1289, 473 s (the 4 x 4 net at h 0.1 reads its hole corner again and
   // leaves none: a valence 7 and a 3 there before).
   int off_node_count = 2;
+  // The requested layout and its sibling (arrival_chord flipped), which always run side by
+  // side, both make their first reading before either is read again (with any number of
+  // threads). Beside one that left no irregular vertex away from singularities, the other
+  // is read again only where, with none left and their corner angles taken as even, it
+  // would be kept over that one (better_cage): a cage with none beats every cage with some,
+  // so a second reading could only win on the tie-breakers after that, and the first
+  // reading's angles are not the second's. The 8 x 8 net at h 0.12 read its requested
+  // layout again for 9.3 s on one core after the sibling, the cage kept, had left none.
+  // Not where work_per_component is 0 (the requested layout alone).
+  bool pair_second_readings = true;
   // With fit_corners: the patches' corners are first chosen all at once (a min-cost flow
   // over every sector, quad/corners.cpp), so that a re-read sector is balanced at its node
   // by the patch across rather than left as an irregular vertex; what that cannot make
