@@ -763,6 +763,15 @@ TEST(Quad, TheKeptCageTradesAFewIrregularVerticesForSquarerQuads) {
   EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
   requested.skewed_quads = 23;  // skewed even: the squarer one
   EXPECT_TRUE(quad_detail::better_cage(requested, sparser));
+  // Then quads over 2.5x the target edge (within 20% or 5 even): the genus-36 net at
+  // h 0.125, its requested layout read again (28) against its sibling (63), even on every
+  // count before and 0.09° apart.
+  requested.oversized_quads = 63, sparser.oversized_quads = 28;
+  EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
+  EXPECT_FALSE(quad_detail::better_cage(requested, sparser));
+  requested.oversized_quads = 33;  // 5 more: even, the squarer one again
+  EXPECT_TRUE(quad_detail::better_cage(requested, sparser));
+  requested.oversized_quads = 0, sparser.oversized_quads = 0;
   requested.irregular_off_singularities = 17;  // 4 more off: not even
   EXPECT_TRUE(quad_detail::better_cage(sparser, requested));
   requested.irregular_off_singularities = 1, sparser.irregular_off_singularities = 0;
