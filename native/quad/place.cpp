@@ -364,8 +364,9 @@ Score score(const State& s, const std::vector<SingularPoint>& singular,
   const size_t own = irregular.size();
   // The window's own pairs sorted, merged with the rivals' (after them in `left`): the
   // order match_pairs would sort them all into.
-  auto own_order = [&](const Explaining& x) { return pair_order(x, irregular[x.entry].vertex); };
-  sort_pairs(own_pairs, [&](int entry) { return irregular[entry].vertex; });
+  auto vertex_of = [&](int entry) { return irregular[entry].vertex; };
+  auto own_order = [&](const Explaining& x) { return pair_order(x, vertex_of(x.entry)); };
+  sort_pairs(own_pairs, vertex_of);
   auto o = own_pairs.begin();
   for (const Explaining& x : rivals.pairs) {
     const auto rival_order = pair_order(x, rivals.vertices[x.entry].vertex);

@@ -1108,6 +1108,12 @@ constexpr double kEvenDensityMiss = 0.1;  // ~10%
 bool better_cage(const QuadStats& a, const QuadStats& b) {
   return better_cage(a, meets_targets(a), b, meets_targets(b));
 }
+namespace {
+// Whether counts x and y differ by more than `at_least` and `share` of the larger: not even.
+bool uneven(int x, int y, double at_least, double share) {
+  return std::abs(x - y) > std::max(at_least, share * std::max(x, y));
+}
+}  // namespace
 bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b) {
   if (meets_a != meets_b) return meets_a;
   if ((a.collapsed_quads > 0) != (b.collapsed_quads > 0)) return a.collapsed_quads == 0;
@@ -1116,18 +1122,13 @@ bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meet
   if (meets_a && std::abs(miss_a - miss_b) > kEvenDensityMiss) return miss_a < miss_b;
   if (meets_a && a.squeezed_arcs != b.squeezed_arcs) return a.squeezed_arcs < b.squeezed_arcs;
   const int off_a = a.irregular_off_singularities, off_b = b.irregular_off_singularities;
-  if (meets_a && off_a != off_b &&
-      (std::min(off_a, off_b) == 0 ||
-       std::abs(off_a - off_b) > std::max(1.0, 0.15 * std::max(off_a, off_b))))
+  if (meets_a && off_a != off_b && (std::min(off_a, off_b) == 0 || uneven(off_a, off_b, 1, 0.15)))
     return off_a < off_b;
-  if (meets_a && std::abs(a.skewed_quads - b.skewed_quads) >
-                     std::max(5.0, 0.2 * std::max(a.skewed_quads, b.skewed_quads)))
+  if (meets_a && uneven(a.skewed_quads, b.skewed_quads, 5, 0.2))
     return a.skewed_quads < b.skewed_quads;
-  if (meets_a && std::abs(a.oversized_quads - b.oversized_quads) >
-                     std::max(5.0, 0.2 * std::max(a.oversized_quads, b.oversized_quads)))
+  if (meets_a && uneven(a.oversized_quads, b.oversized_quads, 5, 0.2))
     return a.oversized_quads < b.oversized_quads;
-  if (meets_a && std::abs(a.irregular_vertices - b.irregular_vertices) >
-                     0.05 * std::max(a.irregular_vertices, b.irregular_vertices))
+  if (meets_a && uneven(a.irregular_vertices, b.irregular_vertices, 0, 0.05))
     return a.irregular_vertices < b.irregular_vertices;
   return a.mean_angle_deviation_deg < b.mean_angle_deviation_deg;
 }
