@@ -38,6 +38,17 @@ constexpr std::uint64_t kSeed = 20190701;      // any fixed value: runs must rep
 constexpr double kEpsilonOfTolerance = 1e-3;   // eps = this × d: "inside" means deeper than eps
 constexpr int kAttemptsPerInteriorPoint = 50;  // rejection sampling gives up after this many
 
+// The message of the exception being handled; call only inside a catch block.
+std::string current_message() {
+  try {
+    throw;
+  } catch (const std::exception& e) {
+    return e.what();
+  } catch (...) {
+    return "an exception of unknown type";
+  }
+}
+
 json position(const Point& p) { return json::array({p.x(), p.y(), p.z()}); }
 
 // Uniform doubles in [0, 1) from the top 53 bits of the engine's output, so the sequence
@@ -123,8 +134,8 @@ std::unique_ptr<Input> load(const fs::path& path, const std::string& name,
     input->volume = signed_volume(input->soup);
     if (input->top.closed() && input->top.manifold())
       input->solid = std::make_unique<Solid>(input->soup);
-  } catch (const std::exception& e) {
-    input->error = e.what();
+  } catch (...) {
+    input->error = current_message();
   }
   return input;
 }
@@ -443,15 +454,15 @@ int main(int argc, char** argv) {
     const json inputs = inputs_json(c);
     out["inputs"] = inputs;
     out["consistency"] = consistency_json(c, inputs);
-  } catch (const std::exception& e) {
-    errors.push_back(std::string("inputs: ") + e.what());
+  } catch (...) {
+    errors.push_back("inputs: " + current_message());
   }
   if (result_dir) {
     try {
       if (!c.design) throw std::runtime_error("the case's inputs could not be read");
       out["result"] = result_json(c, *result_dir);
-    } catch (const std::exception& e) {
-      errors.push_back(std::string("result: ") + e.what());
+    } catch (...) {
+      errors.push_back("result: " + current_message());
       out["result"] = {{"folder", result_dir->string()},
                        {"present", fs::exists(*result_dir / "composed.obj")},
                        {"watertight", false}};
