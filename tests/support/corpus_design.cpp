@@ -385,7 +385,7 @@ void draw_lattice(Drawing& d, Rng& rng, const Vec3& corner) {
     const int edges = (nx - 1) * ny * nz + nx * (ny - 1) * nz + nx * ny * (nz - 1);
     genus = edges - nx * ny * nz + 1;
   } while (genus < 20 || genus > 100);
-  const double spacing = rng.uniform(6, 8), r = rng.uniform(0.9, 1.5);
+  const double spacing = rng.uniform(5.5, 7), r = rng.uniform(0.8, 1.3);
   std::vector<Vec3> node(static_cast<size_t>(nx * ny * nz));
   auto at = [&](int i, int j, int k) -> Vec3& { return node[static_cast<size_t>((k * ny + j) * nx + i)]; };
   for (int k = 0; k < nz; ++k)
@@ -424,15 +424,15 @@ void draw_lattice(Drawing& d, Rng& rng, const Vec3& corner) {
 // and then a lattice and a closed shell touching no solid.
 Drawing draw(Rng& rng, bool lattice) {
   Drawing d;
-  const Vec3 domain(rng.uniform(28, 44), rng.uniform(28, 44), rng.uniform(18, 28));
+  const Vec3 domain(rng.uniform(32, 46), rng.uniform(32, 46), rng.uniform(20, 28));
   const int keep_ins = rng.integer(2, 5), seeds = rng.chance(0.5) ? 1 : 0;
   for (int i = 0; i < keep_ins + seeds; ++i) {
     const bool seed = i >= keep_ins;
-    const double need = seed ? 14 : 8;
+    const double need = seed ? 12 : 7;
     for (int attempt = 0; attempt < 200; ++attempt) {
       const Vec3 center = Vec3(rng.uniform(need, domain.x() - need), rng.uniform(need, domain.y() - need),
                                rng.uniform(std::min(need, domain.z() / 2), std::max(domain.z() - need, domain.z() / 2)));
-      if (!d.free_at(center, need, 4)) continue;
+      if (!d.free_at(center, need, 2)) continue;
       if (seed) {
         draw_seed(d, rng, center, i - keep_ins);
       } else {
@@ -491,7 +491,7 @@ std::string pick(const std::string& forced, const std::vector<std::string>& choi
 GeneratedCase generate_case(uint64_t seed, const GenerateOptions& options) {
   // Separate streams: the base design does not depend on the variation drawn.
   Rng design_rng{seed * 0x2545f4914f6cdd1dULL + 1}, variation_rng{seed * 0x9e3779b97f4a7c15ULL + 7};
-  const bool lattice = options.lattice == "random" ? design_rng.chance(0.3) : options.lattice == "yes";
+  const bool lattice = options.lattice == "random" ? design_rng.chance(0.2) : options.lattice == "yes";
   Drawing d = draw(design_rng, lattice);
   const std::string extraction = pick(options.extraction, {"smoothed", "staircase", "shrunk"}, {2, 1, 1}, design_rng);
   const double shrink = extraction == "shrunk" ? design_rng.uniform(0.25, 2) : 0;
