@@ -213,8 +213,11 @@ if kind == "slow":
     time.sleep(60)
 report = {"stages": {"mesh": 0.5, "quad": 1.5}, "counts": {"organic_components": 1},
           "cages": [], "cage_failures": [], "diagnostics": []}
-if kind == "ok":
-    shutil.copy(design, out / "composed.obj")
+if kind in ("ok", "claims_ok"):
+    text = design.read_text()
+    if kind == "claims_ok":  # one triangle short: open, though the report says composed
+        text = text[:text.rstrip().rindex("\\n")] + "\\n"
+    (out / "composed.obj").write_text(text)
     (out / "cage_000.obj").write_text("v 0 0 0\\n" * 10)
     report["cages"] = [{"component": 0, "quads": 8, "irregular_vertices": 1,
                         "interior_valence4_fraction": 0.9, "method": "field-aligned patch layout",
@@ -234,13 +237,15 @@ def test_runner_records_each_case_with_its_fate(tmp_path):
     corpus = tmp_path / "corpus"
     make_case(corpus / "ok", CUBE, keep_ins=[INNER])
     make_case(corpus / "bad", CUBE, keep_ins=[ACROSS], names={"keep_in_0.obj": "boss"})
+    make_case(corpus / "claims_ok", CUBE)
     make_case(corpus / "crash", CUBE)
     make_case(corpus / "slow", CUBE)
     out = tmp_path / "run"
     done = subprocess.run(["/usr/bin/python3", str(CORPUS), str(corpus), "--jobs", "2", "--timeout", "2",
                            "--cli", str(cli), "--out", str(out)], capture_output=True, text=True, check=True)
     records = {r["case"]: r for r in map(json.loads, (out / "corpus.jsonl").read_text().splitlines())}
-    assert sorted(records) == ["corpus/bad", "corpus/crash", "corpus/ok", "corpus/slow"]
+    assert sorted(records) == ["corpus/bad", "corpus/claims_ok", "corpus/crash", "corpus/ok", "corpus/slow"]
+    assert records["corpus/claims_ok"]["judge"]["result"]["boundary_edges"] == 3
     ok = records["corpus/ok"]
     assert ok["exit"] == 0 and ok["peak_mb"] > 0 and ok["stages"] == {"mesh": 0.5, "quad": 1.5}
     assert ok["judge"]["result"]["watertight"] is True
@@ -253,7 +258,8 @@ def test_runner_records_each_case_with_its_fate(tmp_path):
     assert bad["components"][0] == {"component": 0, "caged": False, "failure": "no layout"}
     assert records["corpus/crash"]["signal"] == 11 and not records["corpus/crash"]["timed_out"]
     assert records["corpus/slow"]["timed_out"] and records["corpus/slow"]["seconds"] < 30
-    for expected in ["watertight 1/4", "inconsistent cases with a named diagnostic 1/1",
-                     "components composed from their cage 1/2", "crashes 1, timeouts 1",
+    for expected in ["watertight 1/5", "inconsistent cases with a named diagnostic 1/1",
+                     "components composed from their cage 2/3", "crashes 1, timeouts 1",
+                     "converter reports composed but the judge finds it not watertight 1",
                      "cases without report.json (their components are not counted) 2"]:
         assert expected in done.stdout.splitlines(), expected
