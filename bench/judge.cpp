@@ -286,6 +286,19 @@ json consistency_json(const Case& c, const json& inputs) {
   return {{"verdict", verdict}, {"reasons", reasons}, {"not_checked", unchecked}};
 }
 
+// Points inside a closed solid: surface points pushed inward by `push` (those that stay
+// inside; at a concave edge a push can leave), then interior points.
+std::vector<Point> inner_points(const Input& input, int count, double push, Random& random) {
+  std::vector<Point> points;
+  for (const auto& s : surface_points(input.soup, count, input.sign(), random)) {
+    const Point p = s.p - push * s.outward;
+    if (input.solid->side(p) == CGAL::ON_BOUNDED_SIDE) points.push_back(p);
+  }
+  for (const auto& p : interior_points(input.soup, *input.solid, count, random))
+    points.push_back(p);
+  return points;
+}
+
 // Points inside each keep-in must be inside the composed mesh.
 json keep_ins_json(const Case& c, const Solid& composed, double eps, Random& random,
                    bool& all_inside) {
@@ -297,13 +310,7 @@ json keep_ins_json(const Case& c, const Solid& composed, double eps, Random& ran
       out.push_back(entry), all_inside = false;
       continue;
     }
-    std::vector<Point> points;
-    for (const auto& s : surface_points(k->soup, c.samples, k->sign(), random)) {
-      const Point p = s.p - eps * s.outward;
-      if (k->solid->side(p) == CGAL::ON_BOUNDED_SIDE) points.push_back(p);
-    }
-    for (const auto& p : interior_points(k->soup, *k->solid, c.samples, random))
-      points.push_back(p);
+    const std::vector<Point> points = inner_points(*k, c.samples, eps, random);
     Worst outside;
     long beyond_tolerance = 0;
     for (const auto& p : points) {
@@ -334,15 +341,9 @@ json keep_outs_json(const Case& c, const Solid& composed, const Soup& composed_s
       out.push_back(entry), all_empty = false;
       continue;
     }
-    std::vector<Point> points;
-    for (const auto& s : surface_points(l->soup, c.samples, l->sign(), random))
-      points.push_back(s.p - 2 * eps * s.outward);
-    for (const auto& p : interior_points(l->soup, *l->solid, c.samples, random))
-      points.push_back(p);
     Worst material, vertices;
     long tested = 0;
-    for (const auto& p : points) {
-      if (l->solid->side(p) != CGAL::ON_BOUNDED_SIDE) continue;
+    for (const auto& p : inner_points(*l, c.samples, 2 * eps, random)) {
       const double depth = l->solid->distance(p);
       if (depth <= eps) continue;
       ++tested;
