@@ -225,7 +225,8 @@ if kind in ("ok", "claims_ok"):
     report["composed"] = {"ok": True, "contacts": [{"component": 0, "surface": "cage"}]}
 else:
     report["cage_failures"] = [{"component": 0, "reason": "no layout"}]
-    report["diagnostics"] = ["9 design vertices lie deeper than d inside keep-in 'keep_in_0'"]
+    report["diagnostics"] = ["9 design vertices lie deeper than d inside keep-in 'keep_in_0': "
+                             "the design does not contain it there"]
 (out / "report.json").write_text(json.dumps(report))
 '''
 
@@ -263,3 +264,22 @@ def test_runner_records_each_case_with_its_fate(tmp_path):
                      "converter reports composed but the judge finds it not watertight 1",
                      "cases without report.json (their components are not counted) 2"]:
         assert expected in done.stdout.splitlines(), expected
+
+
+def test_a_diagnostic_names_an_offender_only_with_its_problem():
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.SourceFileLoader("corpus_runner", str(CORPUS))
+    runner = importlib.util.module_from_spec(importlib.util.spec_from_loader("corpus_runner", loader))
+    loader.exec_module(runner)
+    judged = {"consistency": {"verdict": "inconsistent", "reasons": [
+        {"kind": "keep-in outside the design", "solid": "keep_in_0.obj"},
+        {"kind": "material inside a keep-out", "solid": "keep_out_1.obj"}]}}
+    meta = {"names": {"keep_in_0.obj": "boss"}}
+    mentions = ["the organic boundary crosses a gap between keep-in 'keep_in_0' and keep-out 'keep_out_1'"]
+    assert runner.names_offender(judged, meta, mentions)[0] is False
+    says = ["keep-in 'boss' is not inside the design: 3 design vertices lie up to 2 deep inside it",
+            "4 design vertices lie deeper than d inside keep-out 'keep_out_1': material intrudes into it"]
+    named, offenders = runner.names_offender(judged, meta, says)
+    assert named is True and [o["named"] for o in offenders] == [True, True]
+    assert runner.names_offender(judged, meta, says[:1])[0] is False
