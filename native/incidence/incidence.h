@@ -94,4 +94,15 @@ double median_edge_length(const TriangleMesh& mesh);
 Incidence compute_incidence(const TriangleMesh& design, const SolidSet& solids,
                             const IncidenceOptions& options, const Context& context);
 
+// Throws Error{InvalidInput} (stage "incidence") naming the solid, how many points and how
+// deep, where the solids contradict their roles by more than 3 × incidence.tolerance: a
+// keep-in the design does not contain (design vertices deep inside it where no keep-out
+// cuts it, or the keep-in outside the design touching no design vertex), material inside
+// a keep-out (design vertices deep inside it), a keep-in inside a keep-out (all its
+// vertices). A keep-in buried in the material is fine, and so is a keep-out cutting
+// through a keep-in (a bore through a boss): the keep-out wins there. The pipeline calls it
+// right after compute_incidence, whose counts it uses.
+void check_placement(const TriangleMesh& design, const SolidSet& solids, const Incidence& incidence,
+                     const Context& context);
+
 }  // namespace genbrep

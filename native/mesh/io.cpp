@@ -11,6 +11,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "mesh/detail/file_check.h"
 #include "mesh/mesh.h"
 
 namespace genbrep {
@@ -230,10 +231,7 @@ std::optional<std::string> off_without_comments(const std::string& path) {
 }  // namespace
 
 PolygonSoup read_polygon_file(const std::string& path) {
-  if (!std::ifstream(path).good()) {
-    throw Error(Code::FileError, "cannot open '" + path + "': no such file or not readable",
-                "mesh");
-  }
+  detail::check_mesh_file(path);
   PolyMesh mesh;
   std::vector<Vec3> points;
   PolygonSoup soup;
@@ -256,14 +254,14 @@ PolygonSoup read_polygon_file(const std::string& path) {
     throw Error(Code::FileError,
                 "cannot read '" + path + "': not a readable OBJ, PLY, STL or OFF file", "mesh");
   }
-  // A reader skips a vertex line it cannot parse ("nan", "inf", garbage); the faces that
-  // use it then point nowhere. Say so rather than reporting a bad index later.
-  const auto unreadable = std::count(soup.indices.begin(), soup.indices.end(), -1);
-  if (unreadable > 0) {
+  // check_mesh_file has seen every vertex and index; a corner the reader still could not
+  // place is one of its own limits (binary OFF, for one). Say so rather than guess.
+  const auto unplaced = std::count(soup.indices.begin(), soup.indices.end(), -1);
+  if (unplaced > 0) {
     throw Error(Code::InvalidInput,
-                "'" + path + "' has vertex coordinates that cannot be read as numbers (NaN, " +
-                    "infinite or malformed): " + std::to_string(unreadable) +
-                    " face corners use such vertices",
+                "'" + path + "' has " + std::to_string(unplaced) +
+                    " face corners that the reader could not place on a vertex (an unreadable "
+                    "vertex or an index beyond the vertices)",
                 "mesh");
   }
   restore_double_coordinates(path, points);

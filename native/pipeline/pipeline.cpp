@@ -116,14 +116,20 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
   Result result;
   std::unique_ptr<SolidSet> solids;
   run_stage("mesh", &result, context, [&] {
-    result.design = prepare_closed_mesh(inputs.design.mesh, "design '" + inputs.design.name + "'",
-                                        &result.diagnostics, &result.design_validation);
+    const std::string design = "design '" + inputs.design.name + "'";
+    result.design = prepare_closed_mesh(inputs.design.mesh, design, &result.diagnostics,
+                                        &result.design_validation, &context);
+    // Without solids every triangle is organic and nothing is composed: say so up front.
+    GENBREP_CHECK(!inputs.solids.empty(), Code::InvalidInput,
+                  design + " has no solids: give it at least one keep-in, keep-out or seed");
+    context.step("mesh", 0.5);
     result.solids = prepare_solids(inputs.solids, &result.diagnostics);
   });
   if (wanted("incidence")) {
     run_stage("incidence", &result, context, [&] {
       solids = std::make_unique<SolidSet>(result.solids, &result.diagnostics);
       result.incidence = compute_incidence(result.design, *solids, options.incidence, context);
+      check_placement(result.design, *solids, result.incidence, context);
     });
   }
   std::unique_ptr<TriMesh> mesh;

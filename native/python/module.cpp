@@ -383,6 +383,7 @@ PYBIND11_MODULE(genbrep_native, m) {
           d["non_manifold_edges"] = v.non_manifold_edges;
           d["non_manifold_vertices"] = v.non_manifold_vertices;
           d["inconsistent_edges"] = v.inconsistent_edges;
+          d["duplicate_triangles"] = v.duplicate_triangles;
           d["shells"] = v.shells;
           d["signed_volume"] = v.signed_volume;
           d["closed_manifold"] = v.closed_manifold();

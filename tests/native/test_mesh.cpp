@@ -209,11 +209,12 @@ TEST(MeshPrepare, ErrorsNameTheObjectAndTheProblem) {
   };
   TriangleMesh open = box;
   open.triangles.conservativeResize(10, 3);
-  EXPECT_EQ(message(open), "keep-in 'boss' is open: 4 boundary edges (the surface is open)");
+  EXPECT_EQ(message(open),
+            "keep-in 'boss' is open: 4 boundary edges (the surface is open; the first at (0, 0.5, 1))");
   EXPECT_EQ(message(TriangleMesh{}), "keep-in 'boss' is empty: it has no triangles");
   TriangleMesh nan = box;
   nan.vertices(2, 0) = std::nan("");
-  EXPECT_NE(message(nan).find("1 vertices with NaN"), std::string::npos);
+  EXPECT_NE(message(nan).find("1 vertex with NaN"), std::string::npos);
 }
 
 TEST(MeshPrepare, FlipsAnInsideOutSurfaceAndSaysSo) {
@@ -246,4 +247,84 @@ TEST(MeshPrepare, ReportsTheValidationOfWhatItReturns) {
   EXPECT_EQ(reported.boundary_edges, fresh.boundary_edges);
   EXPECT_DOUBLE_EQ(reported.signed_volume, fresh.signed_volume);
   EXPECT_NEAR(reported.signed_volume, 2.0, 1e-12);
+}
+
+namespace {
+
+// The message read_polygon_file throws for `text` written as `name`, or "no error".
+std::string read_error(const std::string& name, const std::string& text) {
+  try {
+    read_polygon_file(write_temp(name, text));
+  } catch (const Error& e) {
+    EXPECT_EQ(e.stage(), "mesh");
+    return e.what();
+  }
+  return "no error";
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+}  // namespace
+
+// The first reading names what OpenMesh would skip or misread, with its line or number.
+TEST(MeshFileCheck, NamesBrokenTextFilesWithTheirLine) {
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  EXPECT_TRUE(contains(read_error("range.obj", tri + "f 1 2 7\n"),
+                       "line 4: face 1 uses vertex 7 but the file has 3 vertices"));
+  EXPECT_TRUE(contains(read_error("zero.obj", tri + "f 0 1 2\n"), "uses vertex 0; OBJ numbers"));
+  EXPECT_TRUE(contains(read_error("back.obj", tri + "f -1 -2 -4\n"), "counts back past the first"));
+  EXPECT_TRUE(contains(read_error("nan.obj", "v nan 0 0\n"), "line 1: vertex 1 has a NaN coordinate"));
+  EXPECT_TRUE(contains(read_error("inf.obj", "v 0 1e999 0\n"), "an infinite coordinate ('1e999')"));
+  EXPECT_TRUE(contains(read_error("huge.obj", "v 0 1e300 0\n"), "a coordinate of 1e+300, beyond"));
+  EXPECT_TRUE(contains(read_error("short.obj", "v 0 1\n"), "has 2 coordinates; a vertex needs 3"));
+  EXPECT_TRUE(contains(read_error("bin.obj", std::string("v 0 0 0\n\x01\x02", 10)), "byte 8 is 0x01"));
+  EXPECT_TRUE(contains(read_error("empty.obj", ""), "is empty (0 bytes)"));
+  EXPECT_TRUE(contains(read_error("head.off", "OFX\n"), "does not start with OFF"));
+  EXPECT_TRUE(contains(read_error("cut.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n"), "the data ends after 2 vertices"));
+  EXPECT_TRUE(contains(read_error("idx.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"),
+                       "face 0 uses vertex 3 but the file has 3 vertices"));
+  EXPECT_TRUE(contains(read_error("head.ply", "plx\n"), "does not start with 'ply'"));
+  EXPECT_TRUE(contains(read_error("nohead.ply", "ply\nformat ascii 1.0\n"), "has no end_header"));
+}
+
+TEST(MeshFileCheck, NamesTruncatedBinaryFiles) {
+  std::string stl(80, ' ');
+  const uint32_t count = 4;
+  stl.append(reinterpret_cast<const char*>(&count), 4);
+  stl.append(50 * 3 + 20, '\0');
+  EXPECT_TRUE(contains(read_error("cut.stl", stl), "is truncated: it does not start with 'solid', and as "
+                                                   "binary STL its header announces 4 triangles (284 bytes)"));
+  const std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                          "property float y\nproperty float z\nend_header\n" + std::string(30, '\0');
+  EXPECT_TRUE(contains(read_error("cut.ply", ply), "the data ends in vertex 2"));
+  EXPECT_THROW(read_polygon_file(std::filesystem::temp_directory_path().string()), Error);
+}
+
+TEST(MeshPrepare, NamesDuplicatesIntersectionsAndFlatSurfaces) {
+  auto message = [](const TriangleMesh& m) {
+    try {
+      prepare_closed_mesh(m, "design 'd'", nullptr);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), 3);
+  TriangleMesh twice = box;
+  twice.triangles.conservativeResize(box.triangles.rows() + 1, 3);
+  twice.triangles.row(box.triangles.rows()) = box.triangles.row(2);
+  twice.triangle_source.clear();
+  EXPECT_TRUE(contains(message(twice), "has 1 duplicate triangle (face " + std::to_string(box.triangles.rows()) +
+                                           " has the corners of face 2"));
+  const TriangleMesh overlapping = merge({box, box_mesh(Vec3(0.55, 0.55, 0.55), Vec3(2, 2, 2), 3)});
+  EXPECT_TRUE(contains(message(overlapping), "has 2 shells that overlap:"));
+  TriangleMesh huge = box;
+  huge.vertices *= 1e13;
+  EXPECT_TRUE(contains(message(huge), "coordinates beyond ±1e+12"));
+  TriangleMesh flat = box;
+  flat.vertices.col(2).setZero();
+  EXPECT_NE(message(flat), "no error");
+  EXPECT_EQ(self_intersections(box).pairs, 0);
 }
