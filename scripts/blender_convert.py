@@ -118,8 +118,9 @@ def main():
         try:
             bpy.ops.genbrep.convert(design=name, **settings)
         except RuntimeError as exc:  # the operator reported an error
+            # The operator's line is the command line's without "genbrep: "; print it whole.
             message = str(exc).removeprefix("Error: ").strip()
-            print(f"genbrep: FAILED '{name}': {message}", file=sys.stderr, flush=True)
+            print(f"genbrep: {message}", file=sys.stderr, flush=True)
             failed.append(name)
             continue
         collection = bpy.data.collections[results.collection_name(name)]

@@ -2,7 +2,8 @@
 
 Roles are the identifiers of the object property (props.py); the native module takes the
 solid roles in lower case. Every message names the object and the problem and says what
-to do, so the operator can show it as it is.
+to do, so the operator can show it as it is. The meshes themselves are checked natively
+(genbrep_native names every broken input), not here.
 """
 
 import numpy as np
@@ -44,56 +45,10 @@ def choose_design(design_names, requested=None, active=None):
     return design_names[0]
 
 
-def edge_problems(faces):
-    """(boundary edges, non-manifold edges) of a triangle mesh, by vertex index.
-
-    By index, as Blender's own mesh tools count them: vertices that merely share a position
-    (a voxel remesh can make those where two sheets touch) stay distinct.
-    """
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    if len(faces) == 0:
-        return 0, 0
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    edges.sort(axis=1)
-    _, uses = np.unique(edges, axis=0, return_counts=True)
-    return int(np.count_nonzero(uses == 1)), int(np.count_nonzero(uses > 2))
-
-
-def mesh_problem(name, role, vertices, faces):
-    """A message when the mesh of object `name` with `role` cannot be converted, else None."""
-    label = ROLE_LABELS.get(role, role).lower()
-    vertices = np.asarray(vertices)
-    if len(faces) == 0:
-        return (f"{label} '{name}' has no faces: give it geometry or set its role to None")
-    if not np.all(np.isfinite(vertices)):
-        return f"{label} '{name}' has vertices at infinite or NaN positions: fix or remove them"
-    boundary, nonmanifold = edge_problems(faces)
-    if boundary or nonmanifold:
-        parts = []
-        if boundary:
-            parts.append(f"{boundary} boundary edge{'s' if boundary != 1 else ''}")
-        if nonmanifold:
-            parts.append(f"{nonmanifold} non-manifold edge{'s' if nonmanifold != 1 else ''}")
-        return (f"{label} '{name}' is not a closed solid ({', '.join(parts)}): close it "
-                f"(Mesh > Clean Up > Fill Holes, Merge by Distance) or set its role to None")
-    return None
-
-
-def input_problems(design, solids):
-    """Messages for everything wrong with the gathered input (empty list = fine).
-
-    design: dict(name, vertices, faces); solids: list of dict(name, role, vertices, faces),
-    roles as ROLES identifiers.
-    """
-    problems = []
-    problem = mesh_problem(design["name"], "DESIGN", design["vertices"], design["faces"])
-    if problem:
-        problems.append(problem)
-    for solid in solids:
-        problem = mesh_problem(solid["name"], solid["role"], solid["vertices"], solid["faces"])
-        if problem:
-            problems.append(problem)
-    return problems
+def failure_line(message, stage=None):
+    """A native error as the command line prints it, less its 'genbrep: ' prefix:
+    "error in mesh: design 'part' is open: ...", so every front end shows the same line."""
+    return f"error in {stage}: {message}" if stage else str(message)
 
 
 def native_solids(solids):

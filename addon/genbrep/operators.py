@@ -66,15 +66,9 @@ def prepare(context, settings_owner, requested_design=""):
         settings, design_name, bridge.design_grid(design_obj), native.stages(module),
         native.option_keys(module))
 
+    # The meshes are checked natively, so that the panel, the batch script and the command
+    # line name a broken input in the same words.
     design, solids = bridge.gather_input(scene, context.evaluated_depsgraph_get(), design_obj)
-    problems = checks.input_problems(design, solids)
-    if problems:
-        for problem in problems:
-            print("genbrep:", problem)
-        more = f" (and {len(problems) - 1} more: see the console)" if len(problems) > 1 else ""
-        raise checks.InputError(problems[0] + more)
-    if not solids:
-        notes.append("no keep-in, keep-out or seed objects: the whole design is organic")
 
     stages = options.stages_run(native.stages(module), native_options)
     run = job.ConversionJob(module, design, checks.native_solids(solids), native_options)
@@ -90,7 +84,7 @@ def finish(prepared):
     if run.state == job.FAILED:
         if run.details:
             print(run.details)
-        return Outcome("CANCELLED", "ERROR", f"Converting '{name}' failed: {run.error}")
+        return Outcome("CANCELLED", "ERROR", checks.failure_line(run.error, run.error_stage))
     scene = bpy.data.scenes.get(prepared.scene_name)
     if scene is None:
         return Outcome("CANCELLED", "ERROR", f"Scene '{prepared.scene_name}' was deleted "

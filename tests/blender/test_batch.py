@@ -47,7 +47,7 @@ def test_batch_fails_on_open_keep_in(empty_scene, tmp_path):
     out = tmp_path / "result.blend"
     run = _batch(broken, "--out", str(out))
     assert run.returncode == 1, run.stdout + run.stderr
-    assert "keep-in 'open pad' is not a closed solid" in run.stderr
+    assert "genbrep: error in mesh: keep-in 'open pad' is open: 4 boundary edges" in run.stderr
     assert not out.exists()
 
 

@@ -101,44 +101,13 @@ def test_grid_from_properties(properties, expected):
 
 # checks -------------------------------------------------------------------------------------
 
-def _box():
-    v = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
-    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    t = [(a, b, c) for a, b, c, d in quads] + [(a, c, d) for a, b, c, d in quads]
-    return v, np.array(t, np.int32)
-
-
-def test_closed_box_has_no_problem():
-    assert checks.edge_problems(_box()[1]) == (0, 0)
-    assert checks.mesh_problem("pad", "KEEP_IN", *_box()) is None
-
-
-def test_open_and_non_manifold_meshes_are_named():
-    v, t = _box()
-    assert checks.mesh_problem("pad", "KEEP_IN", v, t[1:]) == (
-        "keep-in 'pad' is not a closed solid (3 boundary edges): close it (Mesh > Clean Up > "
-        "Fill Holes, Merge by Distance) or set its role to None")
-    fin = np.vstack([t, [[0, 1, 7]]])
-    assert "(1 boundary edge, 2 non-manifold edges)" in checks.mesh_problem("bore", "KEEP_OUT",
-                                                                          v, fin)
-
-
-def test_empty_and_non_finite_meshes_are_named():
-    assert "seed 'stock' has no faces" in checks.mesh_problem(
-        "stock", "SEED", np.zeros((0, 3)), np.zeros((0, 3), np.int32))
-    v, t = _box()
-    v[0, 0] = np.nan
-    assert "design 'part' has vertices at infinite" in checks.mesh_problem("part", "DESIGN", v, t)
-
-
-def test_input_problems_lists_every_object():
-    v, t = _box()
-    design = dict(name="part", vertices=v, faces=t)
-    solids = [dict(name="a", role="KEEP_IN", vertices=v, faces=t[2:]),
-              dict(name="b", role="SEED", vertices=v, faces=t)]
-    problems = checks.input_problems(design, solids)
-    assert len(problems) == 1 and "keep-in 'a'" in problems[0]
-    assert checks.native_solids(solids)[1]["role"] == "seed"
+def test_failure_line_is_the_command_lines():
+    assert checks.failure_line("design 'part' is open: 3 boundary edges", "mesh") == (
+        "error in mesh: design 'part' is open: 3 boundary edges")
+    assert checks.failure_line("internal error in genbrep_native: boom") == (
+        "internal error in genbrep_native: boom")
+    solids = [dict(name="b", role="SEED", vertices=np.zeros((0, 3)), faces=np.zeros((0, 3)))]
+    assert checks.native_solids(solids)[0]["role"] == "seed"
 
 
 @pytest.mark.parametrize("names, requested, active, expected", [
