@@ -172,7 +172,8 @@ TEST(Pipeline, ErrorsCarryTheStageName) {
     FAIL() << "open keep-in accepted";
   } catch (const Error& e) {
     EXPECT_EQ(e.stage(), "mesh");
-    EXPECT_EQ(std::string(e.what()), "keep-in 'base' is open: 3 boundary edges (the surface is open)");
+    EXPECT_EQ(std::string(e.what()),
+              "keep-in 'base' is open: 3 boundary edges (the surface is open; the first at (-1, 0, 0))");
   }
 }
 
@@ -248,6 +249,7 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
   TriangleMesh open = s.solids[0].mesh;
   open.triangles.conservativeResize(10, 3);
   write_obj((dir / "boss.obj").string(), open);
+  write_obj((dir / "base.obj").string(), s.solids[0].mesh);
   std::ofstream(dir / "empty.obj") << "# nothing\n";
   std::ofstream(dir / "nan.obj") << "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n";
   const std::string design = " --design " + (dir / "design.obj").string();
@@ -258,10 +260,12 @@ TEST(Cli, BadInputGivesOneClearLineAndNonZeroExit) {
   } cases[] = {
       {"convert --design " + (dir / "missing.obj").string() + out, "missing.obj': no such file"},
       {"convert --design " + (dir / "empty.obj").string() + out, "design 'empty' is empty"},
-      {"convert --design " + (dir / "nan.obj").string() + out, "nan.obj' has vertex coordinates that cannot be read"},
+      {"convert --design " + (dir / "nan.obj").string() + out, "nan.obj' line 1: vertex 1 has a NaN coordinate"},
+      {"convert" + design + out, "design 'design' has no solids"},
       {"convert" + design + " --keep-in " + (dir / "boss.obj").string() + out,
        "keep-in 'boss' is open: 4 boundary edges"},
-      {"convert" + design + " --tolerance -1" + out, "tolerance must be positive"},
+      {"convert" + design + " --keep-in " + (dir / "base.obj").string() + " --tolerance -1" + out,
+       "tolerance must be positive"},
       {"convert" + design, "--out is required"},
   };
   for (const auto& c : cases) {
