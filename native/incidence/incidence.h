@@ -94,15 +94,17 @@ double median_edge_length(const TriangleMesh& mesh);
 Incidence compute_incidence(const TriangleMesh& design, const SolidSet& solids,
                             const IncidenceOptions& options, const Context& context);
 
-// Throws Error{InvalidInput} (stage "incidence") naming the solid, how many points and how
-// deep, where the solids contradict their roles by more than 3 × incidence.tolerance: a
-// keep-in the design does not contain (design vertices deep inside it where no keep-out
-// cuts it, or the keep-in outside the design touching no design vertex), material inside
-// a keep-out (design vertices deep inside it), a keep-in inside a keep-out (all its
-// vertices). A keep-in buried in the material is fine, and so is a keep-out cutting
-// through a keep-in (a bore through a boss): the keep-out wins there. The pipeline calls it
-// right after compute_incidence, whose counts it uses.
-void check_placement(const TriangleMesh& design, const SolidSet& solids, const Incidence& incidence,
-                     const Context& context);
+// Where the design and its solids disagree: returns one warning per solid, naming it, how
+// many points, how far and where, for a keep-in the design does not contain (design
+// vertices more than 3 × incidence.tolerance deep inside it, the keep-in away from the
+// design touching no design vertex, or, failing those, points of its surface more than
+// the tolerance outside the design) and for material inside a keep-out (design vertices
+// more than 3 × tolerance deep). A keep-in buried in the material is fine, and so is a
+// keep-out cutting through a keep-in (a bore through a boss): the keep-out wins there.
+// Throws Error{InvalidInput} (stage "incidence") for a keep-in wholly inside a keep-out,
+// which no solid can honour. The pipeline calls it right after compute_incidence, whose
+// counts it uses.
+std::vector<std::string> check_placement(const TriangleMesh& design, const SolidSet& solids,
+                                         const Incidence& incidence, const Context& context);
 
 }  // namespace genbrep

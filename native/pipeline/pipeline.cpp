@@ -129,7 +129,8 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
     run_stage("incidence", &result, context, [&] {
       solids = std::make_unique<SolidSet>(result.solids, &result.diagnostics);
       result.incidence = compute_incidence(result.design, *solids, options.incidence, context);
-      check_placement(result.design, *solids, result.incidence, context);
+      for (auto& warning : check_placement(result.design, *solids, result.incidence, context))
+        result.incidence.diagnostics.push_back(std::move(warning));
     });
   }
   std::unique_ptr<TriMesh> mesh;

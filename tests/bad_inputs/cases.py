@@ -295,7 +295,7 @@ def cases():
              {"design.obj": DESIGN, "pad.obj": box((10, 10, 10), (11, 11, 11))}, WITH_PAD,
              "keep-in 'pad' is outside the design: it is 15.6 from it at its nearest, and no "
              "design vertex lies within d = 0.05 of it; the design must contain every keep-in",
-             stage="incidence"),
+             code=None, exit=0),
         Case("keep_in_inside_keep_out", "mesh",
              {"design.obj": DESIGN, **pad, "bore.obj": box((0.4, -0.5, -0.5), (1.5, 0.5, 0.5))},
              WITH_PAD + [("bore.obj", "keep_out")],
@@ -305,12 +305,12 @@ def cases():
              {"design.obj": DESIGN, "pad.obj": box((0.5, -0.6, -0.6), (2, 0.6, 0.6))}, WITH_PAD,
              "keep-in 'pad' is not inside the design: 25 design vertices lie up to 0.5 deep "
              "inside it (the first at (1, -0.4, -0.4)); the design must contain every keep-in",
-             stage="incidence"),
+             code=None, exit=0),
         Case("material_in_keep_out", "mesh",
              {"design.obj": DESIGN, **pad, "bore.obj": box((-2, -0.5, -0.5), (-0.5, 0.5, 0.5))},
              WITH_PAD + [("bore.obj", "keep_out")],
              "keep-out 'bore' has material inside it: 9 design vertices lie up to 0.5 deep inside "
-             "it (the first at (-1, -0.2, -0.2)); a keep-out must stay empty", stage="incidence"),
+             "it (the first at (-1, -0.2, -0.2)); a keep-out must stay empty", code=None, exit=0),
         Case("no_solids", "mesh", {"design.obj": DESIGN}, [],
              "design 'design' has no solids: give it at least one keep-in, keep-out or seed"),
         # arrays only ------------------------------------------------------------------------

@@ -152,38 +152,41 @@ TEST(Incidence, ProgressCanCancel) {
   }
 }
 
-// Solids placed against their roles by more than 3d are named; a keep-in on the design's
-// surface or buried in it is fine.
+// Where the design disagrees with its solids, each solid is named in a warning; a keep-in
+// on the design's surface or buried in it is fine; a keep-in inside a keep-out is an error.
 TEST(Placement, NamesSolidsThatContradictTheirRoles) {
   const TriangleMesh design = prepare_closed_mesh(box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1), 10), "d", nullptr);
   IncidenceOptions options;
   options.tolerance = 0.05;
-  auto placement_error = [&](std::vector<SolidInput> inputs) {
+  // The first warning, the error, or "no warning".
+  auto placement = [&](std::vector<SolidInput> inputs) {
     const SolidSet solids = make_solids(std::move(inputs));
     const Incidence inc = compute_incidence(design, solids, options, Context());
     try {
-      check_placement(design, solids, inc, Context());
+      const auto warnings = check_placement(design, solids, inc, Context());
+      return warnings.empty() ? std::string("no warning") : warnings.front();
     } catch (const Error& e) {
       EXPECT_EQ(e.code(), Code::InvalidInput);
-      return std::string(e.what());
+      return "error: " + std::string(e.what());
     }
-    return std::string("no error");
   };
   const SolidInput pad{"pad", Role::KeepIn, box_mesh(Vec3(0.6, -0.3, -0.3), Vec3(1, 0.3, 0.3))};
   const SolidInput buried{"core", Role::KeepIn, box_mesh(Vec3(-0.2, -0.2, -0.2), Vec3(0.2, 0.2, 0.2))};
-  EXPECT_EQ(placement_error({pad, buried}), "no error");
-  const std::string sticking_out =
-      placement_error({{"pad", Role::KeepIn, box_mesh(Vec3(0.5, -0.6, -0.6), Vec3(2, 0.6, 0.6))}});
+  EXPECT_EQ(placement({pad, buried}), "no warning");
+  const std::string sticking_out = placement({{"pad", Role::KeepIn, box_mesh(Vec3(0.5, -0.6, -0.6), Vec3(2, 0.6, 0.6))}});
   EXPECT_EQ(sticking_out.rfind("keep-in 'pad' is not inside the design: 25 design vertices", 0), 0u) << sticking_out;
-  const std::string far = placement_error({{"pad", Role::KeepIn, box_mesh(Vec3(10, 10, 10), Vec3(11, 11, 11))}});
+  // Sticking out by 0.08 (more than d, less than 3d): found on the keep-in's own surface.
+  const std::string just_out = placement({{"pad", Role::KeepIn, box_mesh(Vec3(0.6, -0.3, -0.3), Vec3(1.08, 0.3, 0.3))}});
+  EXPECT_EQ(just_out.rfind("keep-in 'pad' is not inside the design: ", 0), 0u) << just_out;
+  EXPECT_NE(just_out.find("points of its surface lie up to 0.08 outside it"), std::string::npos) << just_out;
+  const std::string far = placement({{"pad", Role::KeepIn, box_mesh(Vec3(10, 10, 10), Vec3(11, 11, 11))}});
   EXPECT_EQ(far.rfind("keep-in 'pad' is outside the design: it is 15.6 from it", 0), 0u) << far;
-  const std::string material = placement_error(
-      {pad, {"bore", Role::KeepOut, box_mesh(Vec3(-2, -0.5, -0.5), Vec3(-0.5, 0.5, 0.5))}});
+  const std::string material =
+      placement({pad, {"bore", Role::KeepOut, box_mesh(Vec3(-2, -0.5, -0.5), Vec3(-0.5, 0.5, 0.5))}});
   EXPECT_EQ(material.rfind("keep-out 'bore' has material inside it: 9 design vertices", 0), 0u) << material;
   // A keep-out drilling through the keep-in wins there; one holding all of it is an error.
-  EXPECT_EQ(placement_error({pad, {"bore", Role::KeepOut, box_mesh(Vec3(0.8, -0.1, -0.1), Vec3(1.5, 0.1, 0.1))}}),
-            "no error");
-  const std::string inside = placement_error(
-      {pad, {"bore", Role::KeepOut, box_mesh(Vec3(0.4, -0.5, -0.5), Vec3(1.5, 0.5, 0.5))}});
-  EXPECT_EQ(inside.rfind("keep-in 'pad' lies inside keep-out 'bore': all its 8 vertices", 0), 0u) << inside;
+  EXPECT_EQ(placement({pad, {"bore", Role::KeepOut, box_mesh(Vec3(0.8, -0.1, -0.1), Vec3(1.5, 0.1, 0.1))}}),
+            "no warning");
+  const std::string inside = placement({pad, {"bore", Role::KeepOut, box_mesh(Vec3(0.4, -0.5, -0.5), Vec3(1.5, 0.5, 0.5))}});
+  EXPECT_EQ(inside.rfind("error: keep-in 'pad' lies inside keep-out 'bore': all its 8 vertices", 0), 0u) << inside;
 }
