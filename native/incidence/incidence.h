@@ -98,7 +98,7 @@ Incidence compute_incidence(const TriangleMesh& design, const SolidSet& solids,
 // many points, how far and where, for a keep-in the design does not contain (design
 // vertices more than 3 × incidence.tolerance deep inside it, the keep-in away from the
 // design touching no design vertex, or, failing those, points of its surface more than
-// the tolerance outside the design) and for material inside a keep-out (design vertices
+// twice the tolerance outside the design) and for material inside a keep-out (design vertices
 // more than 3 × tolerance deep). A keep-in buried in the material is fine, and so is a
 // keep-out cutting through a keep-in (a bore through a boss): the keep-out wins there.
 // Throws Error{InvalidInput} (stage "incidence") for a keep-in wholly inside a keep-out,

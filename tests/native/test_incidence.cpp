@@ -175,10 +175,10 @@ TEST(Placement, NamesSolidsThatContradictTheirRoles) {
   EXPECT_EQ(placement({pad, buried}), "no warning");
   const std::string sticking_out = placement({{"pad", Role::KeepIn, box_mesh(Vec3(0.5, -0.6, -0.6), Vec3(2, 0.6, 0.6))}});
   EXPECT_EQ(sticking_out.rfind("keep-in 'pad' is not inside the design: 25 design vertices", 0), 0u) << sticking_out;
-  // Sticking out by 0.08 (more than d, less than 3d): found on the keep-in's own surface.
-  const std::string just_out = placement({{"pad", Role::KeepIn, box_mesh(Vec3(0.6, -0.3, -0.3), Vec3(1.08, 0.3, 0.3))}});
+  // Sticking out by 0.13 (more than 2d, less than 3d): found on the keep-in's own surface.
+  const std::string just_out = placement({{"pad", Role::KeepIn, box_mesh(Vec3(0.6, -0.3, -0.3), Vec3(1.13, 0.3, 0.3))}});
   EXPECT_EQ(just_out.rfind("keep-in 'pad' is not inside the design: ", 0), 0u) << just_out;
-  EXPECT_NE(just_out.find("points of its surface lie up to 0.08 outside it"), std::string::npos) << just_out;
+  EXPECT_NE(just_out.find("points of its surface lie up to 0.13 outside it"), std::string::npos) << just_out;
   const std::string far = placement({{"pad", Role::KeepIn, box_mesh(Vec3(10, 10, 10), Vec3(11, 11, 11))}});
   EXPECT_EQ(far.rfind("keep-in 'pad' is outside the design: it is 15.6 from it", 0), 0u) << far;
   const std::string material =
