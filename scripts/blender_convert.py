@@ -7,8 +7,10 @@ Runs the add-on's Convert operator (synchronously, printing progress) on each ob
 the role Design, or on the ones named with --design. Settings not given here come from
 the scene's genbrep panel settings. Writes --out only when every design converted.
 
-Exit status: 0 all converted; 1 a design failed (the message names the object and the
-problem); 2 bad arguments or genbrep_native missing.
+Exit status, as the command line's: 0 all converted as asked; 3 all gave a solid but some
+component fell back below its best tier (one "genbrep: fallback:" line each on standard
+error); 1 a design failed or gave no solid (the message names the object and the problem;
+--out is not written); 2 bad arguments or genbrep_native missing.
 
 Which add-on: the one in this checkout (../addon) when present, else an installed one.
 """
@@ -130,6 +132,17 @@ def main():
         os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
         with open(bpy.path.abspath(args.report), "w") as out:
             json.dump(reports, out, indent=2, sort_keys=True)
+    # The command line's exit status: 1 when a design gave no solid, 3 when a solid was
+    # made but some component fell back below its best tier (each listed), else 0.
+    for name, run_report in reports.items():
+        composed = run_report.get("composed")
+        if composed is not None and not composed.get("ok"):
+            print(f"genbrep: '{name}' was converted but not composed: see its report",
+                  file=sys.stderr, flush=True)
+            failed.append(name)
+        for line in (composed or {}).get("fallbacks") or ():
+            print(f"genbrep: fallback: '{name}' {line}", file=sys.stderr, flush=True)
+    fell_back = any((r.get("composed") or {}).get("fallbacks") for r in reports.values())
     if failed:
         print(f"genbrep: {len(failed)} of {len(names)} designs failed ({', '.join(failed)}); "
               f"{'nothing written' if args.out else 'no output requested'}", file=sys.stderr)
@@ -139,6 +152,8 @@ def main():
         os.makedirs(os.path.dirname(path), exist_ok=True)
         bpy.ops.wm.save_as_mainfile(filepath=path, check_existing=False, compress=True)
         print(f"genbrep: wrote {path}")
+    if fell_back:
+        sys.exit(3)
 
 
 if __name__ == "__main__":

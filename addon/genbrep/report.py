@@ -130,8 +130,14 @@ def report_lines(report, notes=()):
             lines.append(f"{key}: {format_value(value)}")
     lines.extend(f"note: {note}" for note in notes)
     lines.extend(f"note: {note}" for note in report.get("notes") or ())
+    lines.extend(f"warning: fallback: {f}" for f in fallbacks(report))
     lines.extend(f"warning: {d}" for d in report.get("diagnostics") or ())
     return lines
+
+
+def fallbacks(report):
+    """Components composed below their best tier, one line each with the reason."""
+    return list(((report or {}).get("composed") or {}).get("fallbacks") or ())
 
 
 def warning_count(report):
@@ -150,7 +156,15 @@ def result_summary(design_name, result):
         parts.append(f"{len(loops)} boundary loop{'s' if len(loops) != 1 else ''}")
     cages = result.get("cages") or []
     parts.append(f"{len(cages)} cage{'s' if len(cages) != 1 else ''}")
-    parts.append("composed" if result.get("composed") else "not composed")
+    composed = ((result.get("report") or {}).get("composed") or {})
+    if not result.get("composed"):
+        parts.append("not composed")
+    elif composed.get("floor"):
+        parts.append("composed as the design Boolean (no cage in the solid)")
+    else:
+        n_fallbacks = len(fallbacks(result.get("report")))
+        parts.append("composed" + (f", {n_fallbacks} component{'s' if n_fallbacks != 1 else ''} "
+                                   f"from a fallback" if n_fallbacks else ""))
     seconds = sum(s for _, s in stage_seconds(result.get("report") or {}))
     warnings = warning_count(result.get("report"))
     text = f"Converted '{design_name}' in {seconds:.2f} s: " + ", ".join(parts)

@@ -2,6 +2,9 @@
 // `genbrep compose`: edited cages and the solids in, the recomposed solid out.
 // Thin: parses arguments, reads files, calls pipeline::convert, writes outputs. Bad input
 // exits non-zero with one line naming the file and the problem; it never crashes.
+// Exit status: 0 made as asked; 3 a solid was written but some component fell back to a
+// lower tier (one "genbrep: fallback: …" line each on standard error); 1 nothing could be
+// written (bad input, or no valid solid); 2 usage; 4 internal error (a bug: report it).
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -28,7 +31,10 @@ const char* kUsage =
     "--field-obj, DIR/field.obj (a cross per organic triangle, singularities as points).\n"
     "compose: quad cages (e.g. cage_000.obj from convert, edited) are pulled into the\n"
     "solids their boundary loops lie on and composed: DIR/composed.obj, composed.ply,\n"
-    "report.json.\n";
+    "report.json.\n"
+    "Exit status: 0 everything made as asked; 3 a solid was written but some component\n"
+    "fell back to a lower tier (listed on standard error); 1 nothing could be written;\n"
+    "2 usage error; 4 internal error.\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -163,6 +169,7 @@ int run_convert(int argc, char** argv) {
     } else {
       std::cout << "not composed: see the diagnostics in report.json\n";
     }
+    for (const auto& line : fallbacks(result.composed)) std::cerr << "genbrep: fallback: " << line << '\n';
   }
   if (cmd.field_obj) {
     if (!ran(result, "field")) throw UsageError("--field-obj needs the field stage (check --until)");
@@ -170,7 +177,7 @@ int run_convert(int argc, char** argv) {
     std::cout << "wrote " << (cmd.out / "field.obj").string() << " (" << result.field.singularities.size()
               << " singularities)\n";
   }
-  return 0;
+  return exit_status(result);
 }
 
 // genbrep compose: recompose(solids, cages) from files; cage names are the file stems.
@@ -214,7 +221,8 @@ int run_compose(int argc, char** argv) {
   write_composed((out / "composed.obj").string(), (out / "composed.ply").string(), result.composed.mesh);
   std::cout << "wrote " << (out / "composed.obj").string() << " and composed.ply ("
             << result.composed.mesh.triangles.rows() << " triangles, closed and 2-manifold)\n";
-  return 0;
+  for (const auto& line : fallbacks(result.composed)) std::cerr << "genbrep: fallback: " << line << '\n';
+  return exit_status(result);
 }
 
 }  // namespace
@@ -239,9 +247,9 @@ int main(int argc, char** argv) {
   } catch (const Error& e) {
     std::cerr << "genbrep: error" << (e.stage().empty() ? "" : " in " + e.stage()) << ": "
               << e.what() << '\n';
-    return e.code() == Code::Internal ? 3 : 1;
+    return e.code() == Code::Internal ? 4 : 1;
   } catch (const std::exception& e) {
     std::cerr << "genbrep: internal error: " << e.what() << '\n';
-    return 3;
+    return 4;
   }
 }

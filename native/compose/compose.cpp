@@ -13,6 +13,7 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <limits>
 
 #include "compose/detail/establish.h"
@@ -43,23 +44,29 @@ InexactMesh to_inexact(const TriangleMesh& mesh) {
   return out;
 }
 
-// The running Boolean G. `empty` until the first operand: ∅ ∪ X = X, ∅ \ X = ∅.
+// The running Boolean G. `empty` until the first operand: ∅ ∪ X = X, ∅ \ X = ∅. Every
+// operand is checked against CGAL's preconditions first (operand.cpp); G itself is the
+// output of a corefinement, valid by construction. `why` says what failed.
 struct Accumulator {
   ExactMesh mesh;
   bool empty = true;
-  Diagnostics* diagnostics;
+  std::string why;
 
-  bool apply(const ExactMesh& operand, bool unite, const std::string& what) {
+  bool apply(ExactMesh operand, bool unite, const std::string& what) {
+    const std::string unusable = detail::make_usable(&operand, true);
+    if (!unusable.empty()) {
+      why = what + " " + unusable;
+      return false;
+    }
     if (empty) {
-      if (unite) mesh = operand, empty = false;
+      if (unite) mesh = std::move(operand), empty = false;
       return true;
     }
-    ExactMesh a = mesh, b = operand, out;
+    ExactMesh a = mesh, b = std::move(operand), out;
     const bool ok = unite ? PMP::corefine_and_compute_union(a, b, out)
                           : PMP::corefine_and_compute_difference(a, b, out);
     if (!ok) {
-      diagnostics->push_back(std::string(unite ? "uniting " : "subtracting ") + what +
-                             " gives a non-manifold result");
+      why = std::string(unite ? "uniting " : "subtracting ") + what + " gives a non-manifold result";
       return false;
     }
     mesh = std::move(out);
@@ -207,17 +214,99 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// §8.2 as Booleans: G = (((P \ bites) ∪ additive Q) ∪ K) \ L. False with the reason in
+// g->why when an operand breaks a precondition or a Boolean is not manifold.
+bool classify(const std::vector<detail::OrganicCell>& cells, const SolidSet& solids, const Context& context,
+              ComposeReport* report, Accumulator* g) {
+  bool ok = true;
+  auto solid_pass = [&](Role role, bool unite) {
+    for (int s = 0; s < solids.size() && ok; ++s) {
+      if (solids.input(s).role != role) continue;
+      ++report->solid_cells;
+      ok = g->apply(detail::to_exact(solids.input(s).mesh), unite, solids.describe(s));
+      context.step(kStage, 0.5 + 0.4 * s / std::max(1, solids.size()));
+    }
+  };
+  auto cell_pass = [&](bool additive) {
+    for (const auto& c : cells) {
+      if (c.additive != additive || !ok) continue;
+      ++report->organic_cells;
+      ExactMesh operand = c.closed;
+      if (!additive) PMP::reverse_face_orientations(operand);  // the bite as a solid
+      ok = g->apply(operand, additive, "organic component " + std::to_string(c.component));
+    }
+  };
+  solid_pass(Role::Seed, true);
+  cell_pass(false);
+  cell_pass(true);
+  solid_pass(Role::KeepIn, true);
+  solid_pass(Role::KeepOut, false);
+  if (ok && g->empty) g->why = "the composition is empty";
+  return ok && !g->empty;
+}
+
+// The floor: G = (D ∪ K) \ L, the design with the keep-ins added and the keep-outs
+// removed, exactly. Seeds are not added: where the design lies on a seed it holds the
+// seed's material, and what it leaves out of a seed was eroded.
+bool design_boolean(const TriangleMesh& design, const SolidSet& solids, const Context& context,
+                    Accumulator* g) {
+  if (!g->apply(detail::to_exact(design), true, "the design")) return false;
+  for (const Role role : {Role::KeepIn, Role::KeepOut}) {
+    for (int s = 0; s < solids.size(); ++s) {
+      if (solids.input(s).role != role) continue;
+      if (!g->apply(detail::to_exact(solids.input(s).mesh), role == Role::KeepIn, solids.describe(s))) return false;
+      context.step(kStage, 0.9);
+    }
+  }
+  if (g->empty) g->why = "the design Boolean is empty";
+  return !g->empty;
+}
+
+// The exact G rounded to doubles without new crossings (round.cpp), ordered, with face
+// sources, measured into out->report.
+void finish(const ExactMesh& exact, const SolidSet& solids, const std::vector<detail::OrganicCell>& cells,
+            double scale, Composed* out) {
+  auto& report = out->report;
+  const detail::Rounded rounded = detail::round_robustly(exact, scale);
+  out->mesh = canonical_order(rounded.mesh);
+  out->mesh.triangle_source = face_sources(out->mesh, solids, cells, scale);
+  report.solid_faces = report.organic_faces = 0;
+  for (int s : out->mesh.triangle_source) (s >= 0 ? report.solid_faces : report.organic_faces) += 1;
+  measure(out->mesh, &report);
+  if (rounded.collapsed > 0 || rounded.blocked > 0) report.diagnostics.push_back(near_coincidence(rounded, solids, scale));
+  if (rounded.repaired)
+    report.notes.push_back(std::string("rounding to doubles crossed slivers over their neighbours; the crossing "
+                                       "faces were removed and the holes refilled locally") +
+                           (report.self_intersecting ? ", still crossing" : ", now free of crossings"));
+  else if (rounded.refined > 0)
+    report.notes.push_back("rounding to doubles crossed slivers over their neighbours; autorefined " +
+                           std::to_string(rounded.refined) + (rounded.refined == 1 ? " time" : " times") +
+                           (report.self_intersecting ? ", still crossing" : ", now free of crossings"));
+  if (report.self_intersecting) report.diagnostics.push_back(intersecting_pairs(out->mesh, solids));
+}
+
 }  // namespace
 
+std::vector<std::string> fallbacks(const Composed& composed) {
+  std::vector<std::string> lines;
+  if (!composed.report.ok) return lines;  // nothing was composed: the diagnostics say why
+  for (const auto& c : composed.contacts) {
+    if (c.fallback.empty()) continue;
+    lines.push_back("organic component " + std::to_string(c.component) + ": composed from the " + c.surface +
+                    ": " + c.fallback);
+  }
+  return lines;
+}
+
 Composed compose(const std::vector<OrganicSheet>& sheets, const SolidSet& solids,
-                 const ComposeOptions& options, const Context& context) {
+                 const ComposeOptions& options, const Context& context, const TriangleMesh* design) {
   std::vector<OrganicSurface> surfaces;
   for (const auto& sheet : sheets) surfaces.push_back({sheet, std::nullopt, {}});
-  return compose(surfaces, solids, options, context);
+  return compose(surfaces, solids, options, context, design);
 }
 
 Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& solids,
-                 const ComposeOptions& options, const Context& context) {
+                 const ComposeOptions& options, const Context& context, const TriangleMesh* design) {
   Composed out;
   auto& report = out.report;
   double scale = 0;
@@ -228,35 +317,49 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     if (surface.sheet.mesh.vertices.rows() > 0) scale = std::max(scale, bounding_box_diagonal(surface.sheet.mesh.vertices));
     if (surface.cage) scale = std::max(scale, bounding_box_diagonal(surface.cage->vertices));
   }
-  // §7: contact per component, from its cage when it has one.
+  if (design) scale = std::max(scale, bounding_box_diagonal(design->vertices));
+  // §7: contact per component, from its cage when it has one, else (or when the cage cannot
+  // be pulled) from its design region. An Error from a tier (other than a cancel) is that
+  // tier failing, with its message as the reason.
   auto start = std::chrono::steady_clock::now();
   std::vector<detail::OrganicCell> cells;
-  bool contact_ok = true;
+  std::string failed;  // the first component no tier could compose, and why
+  auto attempt = [&](const std::function<ComponentContact(detail::OrganicCell*)>& tier, int component,
+                     const char* what, detail::OrganicCell* cell) {
+    try {
+      return tier(cell);
+    } catch (const Error& e) {
+      if (e.code() == Code::Cancelled) throw;
+      ComponentContact contact;
+      contact.component = component;
+      contact.diagnostics.push_back("organic component " + std::to_string(component) + ": its " + what +
+                                    " cannot be composed: " + e.what());
+      *cell = detail::OrganicCell();
+      return contact;
+    }
+  };
   for (size_t i = 0; i < surfaces.size(); ++i) {
     context.step(kStage, 0.5 * i / std::max<size_t>(1, surfaces.size()));
     const OrganicSurface& surface = surfaces[i];
+    const int component = surface.sheet.component;
     const bool has_sheet = surface.sheet.mesh.triangles.rows() > 0;
     if (!surface.cage && !has_sheet) continue;
     detail::OrganicCell cell;
     ComponentContact contact;
+    auto region = [&](detail::OrganicCell* c) { return detail::establish(surface.sheet, solids, options, c); };
     if (surface.cage) {
-      try {
-        contact = detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, &cell);
-      } catch (const Error& e) {
-        // A cage edited into something the pull cannot use (e.g. not 2-manifold) is
-        // reported like a pull that does not converge; the design region stands in.
-        if (e.code() == Code::Cancelled) throw;
-        contact = ComponentContact();
-        contact.component = surface.sheet.component;
-        contact.diagnostics.push_back("organic component " + std::to_string(surface.sheet.component) +
-                                      ": its cage cannot be pulled: " + e.what());
-        cell = detail::OrganicCell();
-      }
+      contact = attempt(
+          [&](detail::OrganicCell* c) {
+            return detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, c);
+          },
+          component, "cage", &cell);
       if (!contact.established && has_sheet) {
         Diagnostics why = contact.diagnostics;
-        contact = detail::establish(surface.sheet, solids, options, &cell);
+        contact = attempt(region, component, "design region", &cell);
+        contact.fallback = "its cage could not be pulled into the solids" +
+                           (why.empty() ? std::string() : " (" + why.front() + ")");
         contact.diagnostics.insert(contact.diagnostics.begin(),
-                                   "organic component " + std::to_string(surface.sheet.component) +
+                                   "organic component " + std::to_string(component) +
                                        ": its cage could not be pulled into the solids, composed from "
                                        "the design region instead");
         for (size_t k = 0; k < why.size(); ++k) {
@@ -264,72 +367,74 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
         }
       }
     } else {
-      contact = detail::establish(surface.sheet, solids, options, &cell);
+      contact = attempt(region, component, "design region", &cell);
+    }
+    if (contact.established) {
+      cells.push_back(std::move(cell));
+    } else if (failed.empty()) {
+      failed = "organic component " + std::to_string(component) + " could not be composed" +
+               (contact.diagnostics.empty() ? std::string() : " (" + contact.diagnostics.back() + ")");
     }
     out.contacts.push_back(std::move(contact));
-    const auto& added = out.contacts.back();
-    for (const auto& d : added.diagnostics) report.diagnostics.push_back(d);
-    if (added.established) {
-      cells.push_back(std::move(cell));
-    } else if (surface.cage ? !surface.cage->boundary_chains.empty() : !surface.sheet.loops.empty()) {
-      contact_ok = false;
-    }
+    for (const auto& d : out.contacts.back().diagnostics) report.diagnostics.push_back(d);
   }
   report.seconds_contact = seconds_since(start);
-  if (!contact_ok) return out;  // a named diagnostic says which component and why
-  // §8.2 as Booleans: G = (((P \ bites) ∪ additive Q) ∪ K) \ L.
   start = std::chrono::steady_clock::now();
-  Accumulator g{{}, true, &report.diagnostics};
-  bool ok = true;
-  auto solid_pass = [&](Role role, bool unite) {
-    for (int s = 0; s < solids.size() && ok; ++s) {
-      if (solids.input(s).role != role) continue;
-      ++report.solid_cells;
-      ok = g.apply(detail::to_exact(solids.input(s).mesh), unite, solids.describe(s));
-      context.step(kStage, 0.5 + 0.5 * s / std::max(1, solids.size()));
-    }
-  };
-  auto cell_pass = [&](bool additive) {
-    for (const auto& c : cells) {
-      if (c.additive != additive || !ok) continue;
-      ++report.organic_cells;
-      ExactMesh operand = c.closed;
-      if (!additive) PMP::reverse_face_orientations(operand);  // the bite as a solid
-      ok = g.apply(operand, additive, "organic component " + std::to_string(c.component));
-    }
-  };
-  solid_pass(Role::Seed, true);
-  cell_pass(false);
-  cell_pass(true);
-  solid_pass(Role::KeepIn, true);
-  solid_pass(Role::KeepOut, false);
-  // Rule 4: a cell bounded by organic faces of both orientations (two organic cells that
-  // overlap, or an organic surface running through a keep-in) is inside; say so.
-  for (size_t a = 0; a < cells.size(); ++a) {
-    for (size_t b = a + 1; b < cells.size(); ++b) {
-      ExactMesh x = cells[a].closed, y = cells[b].closed;
-      if (PMP::do_intersect(x, y)) {
-        report.diagnostics.push_back("organic components " + std::to_string(cells[a].component) + " and " +
-                                     std::to_string(cells[b].component) +
-                                     " overlap: cells seen from both orientations are classified "
-                                     "inside (§8.2 rule 4); the input is invalid there");
+  if (failed.empty()) {
+    Accumulator g;
+    if (classify(cells, solids, context, &report, &g)) {
+      // Rule 4: a cell bounded by organic faces of both orientations (two organic cells
+      // that overlap, or an organic surface running through a keep-in) is inside; say so.
+      for (size_t a = 0; a < cells.size(); ++a) {
+        for (size_t b = a + 1; b < cells.size(); ++b) {
+          ExactMesh x = cells[a].closed, y = cells[b].closed;
+          if (PMP::do_intersect(x, y)) {
+            report.diagnostics.push_back("organic components " + std::to_string(cells[a].component) + " and " +
+                                         std::to_string(cells[b].component) +
+                                         " overlap: cells seen from both orientations are classified "
+                                         "inside (§8.2 rule 4); the input is invalid there");
+          }
+        }
       }
+      report.seconds_boolean = seconds_since(start);
+      finish(g.mesh, solids, cells, scale, &out);
+      if (report.ok) return out;
+      failed = report.self_intersecting ? "the composed mesh intersects itself after rounding to doubles"
+                                        : "the composed mesh is not a closed 2-manifold bounding a volume";
+    } else {
+      failed = g.why;
     }
   }
+  report.diagnostics.push_back("the organic components cannot all be composed: " + failed);
+  if (!design) return out;
+  // The floor: the whole design as an exact Boolean with the solids.
+  Accumulator g;
+  const bool ok = design_boolean(*design, solids, context, &g);
   report.seconds_boolean = seconds_since(start);
-  if (!ok || g.empty) {
-    if (g.empty) report.diagnostics.push_back("the composition is empty");
+  if (!ok) {
+    report.ok = false;
+    report.diagnostics.push_back("the design Boolean (the design with the keep-ins added and the keep-outs "
+                                 "removed) cannot be composed either: " + g.why);
     return out;
   }
-  // Edges below 1e-10 × the scene come from operands that nearly coincide; collapsed
-  // before rounding (round.cpp), 10× below the 1e-9 to which faces are matched to solids.
-  detail::Rounded rounded = detail::round_to_doubles(std::move(g.mesh), 1e-10 * scale);
-  out.mesh = canonical_order(rounded.mesh);
-  if (rounded.collapsed > 0 || rounded.blocked > 0) report.diagnostics.push_back(near_coincidence(rounded, solids, scale));
-  out.mesh.triangle_source = face_sources(out.mesh, solids, cells, scale);
-  for (int s : out.mesh.triangle_source) (s >= 0 ? report.solid_faces : report.organic_faces) += 1;
-  measure(out.mesh, &report);
-  if (report.self_intersecting) report.diagnostics.push_back(intersecting_pairs(out.mesh, solids));
+  report.floor = true;
+  report.organic_cells = 0;
+  report.solid_cells = 0;
+  for (auto& contact : out.contacts) {
+    contact.fallback = contact.established ? failed : (contact.diagnostics.empty() ? failed : contact.diagnostics.back());
+    contact.surface = "design Boolean";
+  }
+  // Faces off the solids are attributed to the nearest component's design region.
+  cells.clear();
+  for (const auto& surface : surfaces) {
+    if (surface.sheet.mesh.triangles.rows() == 0) continue;
+    cells.emplace_back();
+    cells.back().component = surface.sheet.component;
+    cells.back().trimmed = detail::to_exact(surface.sheet.mesh);
+  }
+  finish(g.mesh, solids, cells, scale, &out);
+  report.diagnostics.push_back("composed as the design Boolean (the design with the keep-ins added and the "
+                               "keep-outs removed), because " + failed);
   return out;
 }
 

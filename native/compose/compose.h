@@ -21,8 +21,16 @@
 // doubles (compose/round.cpp), and the rounded mesh is what the report measures.
 // Guarantees: faces on input solids carry the input's vertex positions (new vertices lie
 // only on intersection curves); the report is measured on the returned double mesh.
-// A component whose contact cannot be established (a gap between solids, §9.1) fails
-// the composition with a diagnostic naming the solids and the gap; nothing is hidden.
+// Tiers. Each component is composed from the best surface that works: its pulled fitted
+// cage ("cage"), else its design region ("design region"); a component with no boundary on
+// a solid (a closed organic shell) is its own closed cell. When a component has no tier
+// that works, or the Booleans or the rounding cannot give a valid solid, and the design
+// is given, the floor takes over: the exact Boolean (D ∪ K) \ L of the design with the
+// keep-ins added and the keep-outs removed ("design Boolean", every component). Each
+// component's contact says which tier it used and why it fell back.
+// Preconditions: nothing reaches corefinement that breaks CGAL's documented ones (triangle
+// meshes without self-intersections or degenerate faces; Boolean operands closed and
+// bounding a volume): operands are checked first and a failed check takes the next tier.
 #pragma once
 #include <optional>
 #include <string>
@@ -58,7 +66,10 @@ struct ComponentContact {
   bool additive = true;        // Q encloses material (else a bite out of a seed)
   double cell_volume = 0;      // signed volume of Q, design units³
   OrganicSheet pulled;         // the pulled sheet (a cage: its pulled limit tessellation)
-  std::string surface = "design region";  // what was composed: "cage" or "design region"
+  // What was composed: "cage", "design region", "closed shell" (a cage's or the design's
+  // closed component) or "design Boolean" (the floor).
+  std::string surface = "design region";
+  std::string fallback;        // why a lower tier than the component's best was used; empty if none
   QuadCage cage;               // surface == "cage": the pulled cage (matches `pulled`)
   std::vector<double> max_distance_before;  // per loop: max F on the boundary before the pull
   std::vector<double> max_distance_after;   // and after (≤ η when established)
@@ -79,7 +90,9 @@ struct ComposeReport {
   int solid_cells = 0;         // solid operands (keep-ins, seeds, keep-outs)
   int solid_faces = 0, organic_faces = 0;
   double seconds_contact = 0, seconds_boolean = 0;
+  bool floor = false;          // composed as the design Boolean (D ∪ K) \ L
   Diagnostics diagnostics;
+  Diagnostics notes;           // how it went where nothing fell short (e.g. rounding repaired)
 };
 
 // Face sources: solid index ≥ 0, or organic component c encoded as −1 − c.
@@ -113,9 +126,18 @@ struct OrganicSurface {
 
 // §7 then §8 for all sheets. Throws Error{Cancelled} on cancel; everything else is in the
 // report (ok = false and a named diagnostic when the composition cannot be valid).
+// `design` (closed, outward, as validated by mesh/) enables the floor; without it a failed
+// component leaves report.ok false with the reason.
 Composed compose(const std::vector<OrganicSheet>& sheets, const SolidSet& solids,
-                 const ComposeOptions& options, const Context& context);
+                 const ComposeOptions& options, const Context& context,
+                 const TriangleMesh* design = nullptr);
 Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& solids,
-                 const ComposeOptions& options, const Context& context);
+                 const ComposeOptions& options, const Context& context,
+                 const TriangleMesh* design = nullptr);
+
+// The components of a composed solid that fell back from their best tier, one line each
+// ("organic component 2: composed from the design region: …"); empty when everything was
+// made as asked, or when no solid was made (report.ok false: the diagnostics say why).
+std::vector<std::string> fallbacks(const Composed& composed);
 
 }  // namespace genbrep

@@ -54,9 +54,15 @@ TriangleMesh to_double(const ExactMesh& mesh) {
 }
 
 ExactMesh solid_union(const std::vector<SolidInput>& solids, const std::vector<int>& members) {
-  ExactMesh result = to_exact(solids[members.at(0)].mesh);
+  auto checked = [&](int s) {
+    ExactMesh mesh = to_exact(solids[s].mesh);
+    const std::string unusable = make_usable(&mesh, true);
+    GENBREP_CHECK(unusable.empty(), Code::StageFailure, "solid '" + solids[s].name + "' " + unusable);
+    return mesh;
+  };
+  ExactMesh result = checked(members.at(0));
   for (size_t i = 1; i < members.size(); ++i) {
-    ExactMesh other = to_exact(solids[members[i]].mesh), out;
+    ExactMesh other = checked(members[i]), out;
     GENBREP_CHECK(PMP::corefine_and_compute_union(result, other, out), Code::StageFailure,
                   "the union of the solids bordering a loop is not 2-manifold ('" +
                       solids[members[0]].name + "' and '" + solids[members[i]].name + "')");
@@ -103,23 +109,6 @@ std::array<ExactPoint, 3> corners(const ExactMesh& m, FaceIndex f, bool reversed
   return p;
 }
 
-// Signed volume of a closed mesh. Summed in doubles: PMP::volume in the exact kernel
-// builds one lazy sum over every face and evaluates it exactly (11 s of the 5 x 5 net's
-// 19 s contact, 492k faces). Only the sign decides something (additive or a bite); where
-// the double sum is too close to zero to trust its sign, the exact one is taken.
-double signed_volume(const ExactMesh& m) {
-  double sum = 0, magnitude = 0;
-  for (const auto f : m.faces()) {
-    const auto h = m.halfedge(f);
-    const Vec3 a = to_vec(m.point(m.source(h))), b = to_vec(m.point(m.target(h))),
-               c = to_vec(m.point(m.target(m.next(h))));
-    const double six = a.dot(b.cross(c));
-    sum += six;
-    magnitude += std::abs(six);
-  }
-  if (std::abs(sum) <= 1e-9 * magnitude) return CGAL::to_double(PMP::volume(m));
-  return sum / 6;
-}
 
 }  // namespace
 

@@ -67,6 +67,32 @@ std::string explain(const OrganicSheet& sheet, const SheetLoop& loop, const Soli
          (max_after > 0 ? number(max_after) + " outside)" : "at depth " + number(-max_after) + " < |η| = " + number(-eta) + ")");
 }
 
+// A component with no boundary on a solid (a part of the design touching none) is its own
+// closed cell: material when it encloses positive volume, else a void.
+ComponentContact closed_shell(const OrganicSheet& sheet, detail::OrganicCell* cell) {
+  ComponentContact out;
+  out.component = sheet.component;
+  out.surface = "closed shell";
+  out.pulled = sheet;
+  const std::string who = "organic component " + std::to_string(sheet.component);
+  const detail::ExactMesh closed = detail::to_exact(sheet.mesh);
+  const std::string unusable = detail::unusable_operand(closed, true);
+  if (!unusable.empty()) {
+    out.diagnostics.push_back(who + " is a closed organic shell, but its surface " + unusable);
+    return out;
+  }
+  cell->component = sheet.component;
+  cell->closed = closed;
+  cell->trimmed = closed;
+  cell->volume = detail::signed_volume(closed);
+  cell->additive = cell->volume > 0;
+  out.established = true;
+  out.additive = cell->additive;
+  out.cell_volume = cell->volume;
+  out.diagnostics.push_back(who + " touches no solid: composed as a closed organic shell");
+  return out;
+}
+
 }  // namespace
 
 ComponentContact detail::establish(const OrganicSheet& sheet, const SolidSet& solids,
@@ -88,8 +114,8 @@ ComponentContact detail::establish_cage(const QuadCage& cage, const std::vector<
         return std::move(pulled.sheet);
       },
       solids, options, cell);
-  out.surface = "cage";
-  out.cage = std::move(last);
+  if (out.surface != "closed shell") out.surface = "cage";
+  out.cage = last.vertices.rows() > 0 ? std::move(last) : cage;
   return out;
 }
 
@@ -100,9 +126,10 @@ ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPu
   out.component = sheet.component;
   std::set<int> members;
   for (const auto& loop : sheet.loops) members.insert(loop.solids.begin(), loop.solids.end());
-  if (sheet.loops.empty() || members.empty()) {
+  if (sheet.loops.empty()) return closed_shell(sheet, cell);
+  if (members.empty()) {
     out.diagnostics.push_back("organic component " + std::to_string(sheet.component) +
-                              " has no boundary on a solid: a closed organic shell");
+                              ": its boundary loops border no solid");
     return out;
   }
   std::vector<SolidInput> inputs;

@@ -6,6 +6,11 @@
 // folds the slivers over their neighbours (24 intersecting triangle pairs). Collapsing
 // edges far below any design tolerance before rounding removes the slivers; every
 // vertex moves by less than `tolerance`.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
+#include <CGAL/Polygon_mesh_processing/repair_self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/boost/graph/Euler_operations.h>
 
 #include <algorithm>
@@ -65,6 +70,100 @@ Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
     if (collapsed == 0) break;
   }
   out.mesh = to_double(mesh);
+  return out;
+}
+
+namespace {
+
+bool crosses_itself(const TriangleMesh& mesh) {
+  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
+  CGAL::Surface_mesh<Inexact::Point_3> m;
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+    m.add_vertex(Inexact::Point_3(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)));
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    m.add_face(CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 0))),
+               CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 1))),
+               CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 2))));
+  return CGAL::Polygon_mesh_processing::does_self_intersect(m);
+}
+
+// CGAL's local repair of the faces that cross: removes them and a few rings around them
+// and refills the holes (constrained smoothing or hole filling), leaving the rest of the
+// mesh as it is. Replaces out->mesh when the result is closed.
+void repair_locally(Rounded* out) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
+  CGAL::Surface_mesh<Inexact::Point_3> m;
+  for (Eigen::Index v = 0; v < out->mesh.vertices.rows(); ++v)
+    m.add_vertex(Inexact::Point_3(out->mesh.vertices(v, 0), out->mesh.vertices(v, 1), out->mesh.vertices(v, 2)));
+  for (Eigen::Index t = 0; t < out->mesh.triangles.rows(); ++t)
+    m.add_face(CGAL::SM_Vertex_index(static_cast<unsigned>(out->mesh.triangles(t, 0))),
+               CGAL::SM_Vertex_index(static_cast<unsigned>(out->mesh.triangles(t, 1))),
+               CGAL::SM_Vertex_index(static_cast<unsigned>(out->mesh.triangles(t, 2))));
+  bool repaired = false;
+  // Its smoothing checks for degenerate faces with CGAL_warning (printed, not thrown) and
+  // goes on; the result is checked here.
+  const auto previous = CGAL::set_warning_handler([](const char*, const char*, const char*, int, const char*) {});
+  try {
+    repaired = PMP::experimental::remove_self_intersections(m, CGAL::parameters::apply_per_connected_component(false));
+  } catch (const std::exception&) {
+    repaired = false;
+  }
+  CGAL::set_warning_handler(previous);
+  if (!repaired || !CGAL::is_closed(m)) return;
+  m.collect_garbage();
+  TriangleMesh mesh;
+  mesh.vertices.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
+  for (const auto v : m.vertices()) {
+    const auto& p = m.point(v);
+    mesh.vertices.row(static_cast<Eigen::Index>(v.idx())) << p.x(), p.y(), p.z();
+  }
+  mesh.triangles.resize(static_cast<Eigen::Index>(m.number_of_faces()), 3);
+  for (const auto f : m.faces()) {
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(m.halfedge(f), m))
+      mesh.triangles(static_cast<Eigen::Index>(f.idx()), k++) = static_cast<int>(v.idx());
+    mesh.triangle_source.push_back(static_cast<int>(f.idx()));
+  }
+  out->mesh = std::move(mesh);
+  out->repaired = true;
+  out->intersecting = crosses_itself(out->mesh);
+}
+
+}  // namespace
+
+Rounded round_robustly(const ExactMesh& exact, double scale) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  Rounded out = round_to_doubles(exact, 1e-10 * scale);
+  out.intersecting = crosses_itself(out.mesh);
+  if (out.intersecting) repair_locally(&out);
+  // Where that fails: take the rounded mesh back into exact arithmetic, where its
+  // crossings are exact; remove its zero-area triangles, autorefine it and drop the
+  // patches the crossings cut off (CGAL's autorefine_and_remove_self_intersections),
+  // collapse short edges, round again, and repair locally what still crosses. Each round
+  // moves vertices by at most the rounding error and the collapse tolerance, and cuts only
+  // where the previous rounding crossed. CGAL throws where three triangles cross along one
+  // segment; that ends the rounds.
+  for (int round = 0; round < 2 && out.intersecting; ++round) {
+    ExactMesh again = to_exact(out.mesh);
+    try {
+      PMP::remove_degenerate_faces(again);
+      again.collect_garbage();
+      if (!PMP::experimental::autorefine_and_remove_self_intersections(again)) break;
+    } catch (const std::exception&) {
+      break;
+    }
+    again.collect_garbage();
+    Rounded next = round_to_doubles(std::move(again), 1e-10 * scale);
+    next.collapsed += out.collapsed;
+    next.blocked += out.blocked;
+    next.longest = std::max(next.longest, out.longest);
+    if (next.where.empty()) next.where = out.where;
+    next.refined = out.refined + 1;
+    next.intersecting = crosses_itself(next.mesh);
+    if (next.intersecting) repair_locally(&next);
+    out = std::move(next);
+  }
   return out;
 }
 

@@ -46,6 +46,12 @@ void run_stage(const std::string& stage, Result* result, const Context& context,
 
 }  // namespace
 
+int exit_status(const Result& result) {
+  if (!ran(result, "compose")) return 0;
+  if (!result.composed.report.ok) return 1;
+  return fallbacks(result.composed).empty() ? 0 : 3;
+}
+
 std::vector<QuadCage> final_cages(const Result& result) {
   if (!ran(result, "fit") && !ran(result, "compose")) return result.quads.cages;
   std::vector<QuadCage> cages;
@@ -183,7 +189,13 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
         surface.cage = f.cage;
         for (int loop : f.cage.chain_loop) surface.chain_solids.push_back(result.relaxed.partition.loops[loop].solids);
       }
-      result.composed = compose(surfaces, *solids, options.compose, context);
+      result.composed = compose(surfaces, *solids, options.compose, context, &result.design);
+      // A component the quad stage gave no cage was composed below its best tier too.
+      for (auto& contact : result.composed.contacts) {
+        const OrganicSurface& surface = surfaces.at(static_cast<size_t>(contact.component));
+        if (!surface.cage && contact.fallback.empty() && contact.surface == "design region")
+          contact.fallback = "the quad stage gave it no cage (see the quad diagnostics)";
+      }
     });
   }
   result.report_json = make_report(inputs, options, result);

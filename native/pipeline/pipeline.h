@@ -105,6 +105,13 @@ TriangleMesh component_region(const TriangleMesh& design, const Partition& parti
 std::vector<std::vector<Vec3>> chain_curves(const TriangleMesh& design, const Partition& partition,
                                             const QuadCage& cage);
 
+// The exit status of a conversion or recomposition, the same for the command line, the
+// Python module and the Blender batch script: 0 when everything asked for was made as asked;
+// 3 when a solid was made but some component fell back below its best tier (each one in
+// fallbacks(result.composed)); 1 when compose ran and no valid solid could be made.
+// (2 is a usage error and 4 an internal error, both the command line's own.)
+int exit_status(const Result& result);
+
 // Whether `stage` ran in the conversion that gave `result`.
 bool ran(const Result& result, const std::string& stage);
 

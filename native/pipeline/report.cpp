@@ -10,7 +10,8 @@ namespace {
 using json = nlohmann::ordered_json;
 
 // The "composed" section: checks measured on the composed mesh, and per component which
-// surface was composed ("cage": the pulled fitted cage; "design region": the stand-in).
+// surface was composed (its tier: "cage", the pulled fitted cage; "design region"; "closed
+// shell"; "design Boolean", the floor) and, below its best tier, why ("fallback").
 json composed_json(const Result& result) {
   const ComposeReport& c = result.composed.report;
   json contacts = json::array();
@@ -24,6 +25,7 @@ json composed_json(const Result& result) {
                   {"contact_curves", contact.curves.size()},
                   {"max_distance_before", contact.max_distance_before},
                   {"max_distance_after", contact.max_distance_after}};
+    if (!contact.fallback.empty()) entry["fallback"] = contact.fallback;
     if (contact.surface == "cage") {
       entry["control_points"] = contact.cage.vertices.rows();
       entry["quads"] = contact.cage.quads.rows();
@@ -45,6 +47,8 @@ json composed_json(const Result& result) {
   out["genus"] = c.genus;
   out["organic_cells"] = c.organic_cells;
   out["solid_cells"] = c.solid_cells;
+  out["floor"] = c.floor;
+  out["fallbacks"] = fallbacks(result.composed);
   out["contacts"] = contacts;
   return out;
 }
@@ -281,6 +285,7 @@ std::string make_report(const Inputs& inputs, const Options& options, const Resu
   for (const auto& d : result.relaxed.notes) notes.push_back(d);
   for (const auto& d : result.field.notes) notes.push_back(d);
   for (const auto& d : result.quads.notes) notes.push_back("quad: " + d);
+  for (const auto& d : result.composed.report.notes) notes.push_back("compose: " + d);
   report["notes"] = notes;
   return report.dump(2);
 }

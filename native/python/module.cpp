@@ -194,6 +194,8 @@ py::dict convert_py(const py::dict& design, const py::list& solids, const py::ob
   });
   py::dict out;
   out["report"] = py::module_::import("json").attr("loads")(result.report_json);
+  out["status"] = exit_status(result);
+  out["fallbacks"] = fallbacks(result.composed);
   py::dict d;
   d["vertices"] = matrix_to_array(result.design.vertices);
   d["faces"] = matrix_to_array(result.design.triangles);
@@ -288,6 +290,8 @@ py::dict recompose_py(const py::list& solid_list, const py::list& cage_list, con
   });
   py::dict out;
   out["report"] = py::module_::import("json").attr("loads")(result.report_json);
+  out["status"] = exit_status(result);
+  out["fallbacks"] = fallbacks(result.composed);
   py::list cages_out = cages_list(result);
   for (size_t i = 0; i < cages_out.size() && i < names.size(); ++i) cages_out[i]["name"] = names[i];
   out["cages"] = cages_out;
@@ -341,7 +345,9 @@ PYBIND11_MODULE(genbrep_native, m) {
       "convert(design, solids=[], options=None, progress=None) -> dict\n\n"
       "design: dict(name, vertices float64 N×3, faces int M×3); solids: list of dict(name,\n"
       "role in keep_in/keep_out/seed, vertices, faces); options: dict(tolerance, incidence,\n"
-      "grid_origin, grid_h, until); progress(stage, fraction) -> bool, False cancels.");
+      "grid_origin, grid_h, until); progress(stage, fraction) -> bool, False cancels.\n"
+      "The result's 'status' is the command line's exit status (0 made as asked, 3 a solid\n"
+      "with fallbacks, listed one per line in 'fallbacks', 1 no solid).");
 
   m.def(
       "recompose",

@@ -37,8 +37,30 @@ struct Rounded {
   int blocked = 0;            // short edges left: collapsing them would pinch the surface
   double longest = 0;         // longest edge collapsed, design units
   std::vector<Vec3> where;    // kept ends of the first collapsed edges
+  int refined = 0;            // round_robustly: autorefinement rounds
+  bool repaired = false;      // round_robustly: CGAL's local self-intersection repair ran
+  bool intersecting = false;  // round_robustly: the result still crosses itself
 };
 Rounded round_to_doubles(ExactMesh mesh, double tolerance);
+
+// round_to_doubles at 1e-10 × `scale`; where the rounded mesh crosses itself, CGAL's local
+// repair of the crossing faces, then (at most 2 rounds) back to exact, autorefined, the
+// cut-off patches removed, rounded and repaired again (round.cpp).
+Rounded round_robustly(const ExactMesh& exact, double scale);
+
+// Why `mesh` may not enter corefinement (operand.cpp), in words after its name ("is not
+// closed", "intersects itself (3 triangle pairs)"); empty when it may. `closed`: as a
+// Boolean operand (closed and bounding a volume), else as a corefinement surface.
+std::string unusable_operand(const ExactMesh& mesh, bool closed);
+// The same after removing zero-area triangles (PMP::remove_degenerate_faces, exact: the
+// surface keeps its shape), which the mesh stage accepts and CGAL does not.
+std::string make_usable(ExactMesh* mesh, bool closed);
+
+// Signed volume of a closed mesh. Summed in doubles: PMP::volume in the exact kernel
+// builds one lazy sum over every face and evaluates it exactly (11 s of the 5 x 5 net's
+// 19 s contact, 492k faces). Only the sign decides something (additive or a bite); where
+// the double sum is too close to zero to trust its sign, the exact one is taken.
+double signed_volume(const ExactMesh& m);
 
 // Orders exact points lexicographically (to merge and match vertices across meshes).
 struct PointLess {

@@ -1,0 +1,67 @@
+// compose/operand.cpp — CGAL's preconditions checked before corefinement.
+// PMP::corefine and the corefine_and_compute_* Booleans require triangle meshes that do
+// not self-intersect (degenerate faces count as self-intersections), and the Booleans
+// require closed meshes that bound a volume. Violating them is undefined behaviour: a
+// SIGSEGV inside the corefinement's intersection filter was seen on an unsmoothed voxel
+// bracket. Every operand is checked here first; a failed check takes the next tier.
+#include <CGAL/Polygon_mesh_processing/measure.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/shape_predicates.h>
+
+#include <cmath>
+
+#include "compose/detail/exact.h"
+
+namespace genbrep::detail {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+std::string unusable_operand(const ExactMesh& mesh, bool closed) {
+  if (mesh.is_empty()) return "is empty";
+  if (!CGAL::is_triangle_mesh(mesh)) return "is not a triangle mesh";
+  if (!mesh.is_valid(false)) return "is not a valid halfedge mesh";
+  int degenerate = 0;
+  for (const auto f : mesh.faces()) degenerate += PMP::is_degenerate_triangle_face(f, mesh);
+  if (degenerate > 0) return "has " + std::to_string(degenerate) + " degenerate triangles";
+  if (closed && !CGAL::is_closed(mesh)) return "is not closed";
+  std::vector<std::pair<ExactMesh::Face_index, ExactMesh::Face_index>> pairs;
+  PMP::self_intersections(mesh, std::back_inserter(pairs));
+  if (!pairs.empty()) return "intersects itself (" + std::to_string(pairs.size()) + " triangle pairs)";
+  if (closed && !PMP::does_bound_a_volume(mesh)) return "does not bound a volume";
+  return {};
+}
+
+std::string make_usable(ExactMesh* mesh, bool closed) {
+  bool degenerate = false;
+  for (const auto f : mesh->faces()) degenerate = degenerate || PMP::is_degenerate_triangle_face(f, *mesh);
+  // Zero-area triangles (collinear corners) are valid input to the mesh stage but count as
+  // self-intersections for CGAL: flip or collapse them away, which keeps the surface's
+  // shape exactly (exact kernel), then check what remains.
+  if (degenerate) {
+    PMP::remove_degenerate_faces(*mesh);
+    mesh->collect_garbage();
+  }
+  return unusable_operand(*mesh, closed);
+}
+
+double signed_volume(const ExactMesh& m) {
+  double sum = 0, magnitude = 0;
+  for (const auto f : m.faces()) {
+    const auto h = m.halfedge(f);
+    const auto& a = m.point(m.source(h));
+    const auto& b = m.point(m.target(h));
+    const auto& c = m.point(m.target(m.next(h)));
+    const Vec3 pa(CGAL::to_double(a.x()), CGAL::to_double(a.y()), CGAL::to_double(a.z()));
+    const Vec3 pb(CGAL::to_double(b.x()), CGAL::to_double(b.y()), CGAL::to_double(b.z()));
+    const Vec3 pc(CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z()));
+    const double six = pa.dot(pb.cross(pc));
+    sum += six;
+    magnitude += std::abs(six);
+  }
+  if (std::abs(sum) <= 1e-9 * magnitude) return CGAL::to_double(PMP::volume(m));
+  return sum / 6;
+}
+
+}  // namespace genbrep::detail
