@@ -135,6 +135,13 @@ void print_warnings(const std::string& report_json) {
     std::cerr << "genbrep: warning: " << warning.get<std::string>() << '\n';
 }
 
+// Exit 1 without a solid: one error line with compose's last word on why.
+void print_not_composed(const Result& result) {
+  const auto& diagnostics = result.composed.report.diagnostics;
+  std::cerr << "genbrep: error in compose: no valid solid could be composed"
+            << (diagnostics.empty() ? std::string() : ": " + diagnostics.back()) << '\n';
+}
+
 int run_convert(int argc, char** argv) {
   Command cmd = parse(argc, argv);
   const Result result = convert(cmd.inputs, cmd.options, Context());
@@ -168,6 +175,7 @@ int run_convert(int argc, char** argv) {
                 << result.composed.mesh.triangles.rows() << " triangles, closed and 2-manifold)\n";
     } else {
       std::cout << "not composed: see the diagnostics in report.json\n";
+      print_not_composed(result);
     }
     for (const auto& line : fallbacks(result.composed)) std::cerr << "genbrep: fallback: " << line << '\n';
   }
@@ -216,6 +224,7 @@ int run_compose(int argc, char** argv) {
   std::cout << "wrote " << (out / "report.json").string() << '\n';
   if (!result.composed.report.ok) {
     std::cout << "not composed: see the diagnostics in report.json\n";
+    print_not_composed(result);
     return 1;
   }
   write_composed((out / "composed.obj").string(), (out / "composed.ply").string(), result.composed.mesh);

@@ -87,10 +87,21 @@ bool crosses_itself(const TriangleMesh& mesh) {
   return CGAL::Polygon_mesh_processing::does_self_intersect(m);
 }
 
+double enclosed_volume(const TriangleMesh& mesh) {
+  double six = 0;
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
+    const Vec3 a = mesh.vertices.row(mesh.triangles(t, 0)), b = mesh.vertices.row(mesh.triangles(t, 1)),
+               c = mesh.vertices.row(mesh.triangles(t, 2));
+    six += a.dot(b.cross(c));
+  }
+  return six / 6;
+}
+
 // CGAL's local repair of the faces that cross: removes them and a few rings around them
 // and refills the holes (constrained smoothing or hole filling), leaving the rest of the
-// mesh as it is. Replaces out->mesh when the result is closed.
-void repair_locally(Rounded* out) {
+// mesh as it is, every new face within `envelope` of the old surface (CGAL's polyhedral
+// envelope). Replaces out->mesh when the result is closed and the change local.
+void repair_locally(Rounded* out, double envelope) {
   namespace PMP = CGAL::Polygon_mesh_processing;
   using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
   CGAL::Surface_mesh<Inexact::Point_3> m;
@@ -105,13 +116,27 @@ void repair_locally(Rounded* out) {
   // goes on; the result is checked here.
   const auto previous = CGAL::set_warning_handler([](const char*, const char*, const char*, int, const char*) {});
   try {
-    repaired = PMP::experimental::remove_self_intersections(m, CGAL::parameters::apply_per_connected_component(false));
+    repaired = PMP::experimental::remove_self_intersections(
+        m, CGAL::parameters::apply_per_connected_component(false).polyhedral_envelope_epsilon(envelope));
   } catch (const std::exception&) {
     repaired = false;
   }
   CGAL::set_warning_handler(previous);
   if (!repaired || !CGAL::is_closed(m)) return;
   m.collect_garbage();
+  // Local means local: a repair that changed more than 1% of the faces or 0.1% of the
+  // volume (hole filling can close over a whole region) is not taken.
+  const double before = enclosed_volume(out->mesh);
+  double after = 0;
+  for (const auto f : m.faces()) {
+    const auto h = m.halfedge(f);
+    const auto &a = m.point(m.source(h)), &b = m.point(m.target(h)), &c = m.point(m.target(m.next(h)));
+    after += Vec3(a.x(), a.y(), a.z()).dot(Vec3(b.x(), b.y(), b.z()).cross(Vec3(c.x(), c.y(), c.z()))) / 6;
+  }
+  const double faces_before = static_cast<double>(out->mesh.triangles.rows());
+  if (std::abs(static_cast<double>(m.number_of_faces()) - faces_before) > 0.01 * faces_before ||
+      std::abs(after - before) > 1e-3 * std::abs(before))
+    return;
   TriangleMesh mesh;
   mesh.vertices.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
   for (const auto v : m.vertices()) {
@@ -136,7 +161,9 @@ Rounded round_robustly(const ExactMesh& exact, double scale) {
   namespace PMP = CGAL::Polygon_mesh_processing;
   Rounded out = round_to_doubles(exact, 1e-10 * scale);
   out.intersecting = crosses_itself(out.mesh);
-  if (out.intersecting) repair_locally(&out);
+  // The refilled faces stay within 1e-7 × the scene of the faces they replace.
+  const double envelope = 1e-7 * scale;
+  if (out.intersecting) repair_locally(&out, envelope);
   // Where that fails: take the rounded mesh back into exact arithmetic, where its
   // crossings are exact; remove its zero-area triangles, autorefine it and drop the
   // patches the crossings cut off (CGAL's autorefine_and_remove_self_intersections),
@@ -161,7 +188,7 @@ Rounded round_robustly(const ExactMesh& exact, double scale) {
     if (next.where.empty()) next.where = out.where;
     next.refined = out.refined + 1;
     next.intersecting = crosses_itself(next.mesh);
-    if (next.intersecting) repair_locally(&next);
+    if (next.intersecting) repair_locally(&next, envelope);
     out = std::move(next);
   }
   return out;

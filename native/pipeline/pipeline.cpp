@@ -125,9 +125,11 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
     const std::string design = "design '" + inputs.design.name + "'";
     result.design = prepare_closed_mesh(inputs.design.mesh, design, &result.diagnostics,
                                         &result.design_validation, &context);
-    // Without solids every triangle is organic and nothing is composed: say so up front.
-    GENBREP_CHECK(!inputs.solids.empty(), Code::InvalidInput,
-                  design + " has no solids: give it at least one keep-in, keep-out or seed");
+    // Without solids every triangle is organic: the design is one closed organic shell
+    // per part, composed from its cage. Say so, since it is rarely what was meant.
+    if (inputs.solids.empty())
+      result.diagnostics.push_back(design + " has no solids (keep-in, keep-out or seed): every part of it "
+                                   "is organic and composed from its cage as a closed shell");
     context.step("mesh", 0.5);
     result.solids = prepare_solids(inputs.solids, &result.diagnostics);
   });
@@ -170,10 +172,23 @@ Result convert(const Inputs& inputs, const Options& options, const Context& cont
       if (fit_options.delta <= 0 && options.incidence.mode == IncidenceOptions::Mode::Grid) {
         fit_options.delta = 3 * options.incidence.grid_h;  // δ = 3h for level sets (§6.3)
       }
-      for (const QuadCage& cage : result.quads.cages) {
-        const TriangleMesh region = component_region(result.relaxed.design, result.relaxed.partition, cage.component);
-        result.fitted.push_back(fit_cage(cage, region, chain_curves(result.relaxed.design, result.relaxed.partition, cage),
-                                         fit_options, context));
+      // A cage the fit cannot take (e.g. a boundary chain too short to be a closed curve)
+      // becomes a quad failure with the reason: its component is composed without a cage.
+      for (size_t i = 0; i < result.quads.cages.size();) {
+        const QuadCage& cage = result.quads.cages[i];
+        try {
+          const TriangleMesh region = component_region(result.relaxed.design, result.relaxed.partition, cage.component);
+          result.fitted.push_back(fit_cage(cage, region, chain_curves(result.relaxed.design, result.relaxed.partition, cage),
+                                           fit_options, context));
+          ++i;
+        } catch (const Error& e) {
+          if (e.code() == Code::Cancelled) throw;
+          result.quads.failures.push_back({cage.component, std::string("the fit cannot take its cage: ") + e.what()});
+          result.quads.diagnostics.push_back("component " + std::to_string(cage.component) +
+                                             ": no cage: the fit cannot take it: " + e.what());
+          result.quads.cages.erase(result.quads.cages.begin() + static_cast<long>(i));
+          if (i < result.quads.stats.size()) result.quads.stats.erase(result.quads.stats.begin() + static_cast<long>(i));
+        }
       }
     });
   }

@@ -312,7 +312,8 @@ def cases():
              "keep-out 'bore' has material inside it: 9 design vertices lie up to 0.5 deep inside "
              "it (the first at (-1, -0.2, -0.2)); a keep-out must stay empty", code=None, exit=0),
         Case("no_solids", "mesh", {"design.obj": DESIGN}, [],
-             "design 'design' has no solids: give it at least one keep-in, keep-out or seed"),
+             "design 'design' has no solids (keep-in, keep-out or seed): every part of it is "
+             "organic and composed from its cage as a closed shell", code=None, exit=0),
         # arrays only ------------------------------------------------------------------------
         Case("nan_vertex_array", "arrays", {}, WITH_PAD,
              "design 'design' has 1 vertex with NaN or infinite coordinates (first: vertex 3)",

@@ -926,3 +926,22 @@ TEST(Compose, ZeroAreaTrianglesInASolidAreRepairedBeforeCorefinement) {
               joined(r.composed.report.diagnostics).c_str());
   expect_valid(r);
 }
+
+// A design with no solids at all is one closed organic shell per part, composed from its
+// cage (warned about: it is rarely what was meant), not an empty composition.
+TEST(Compose, DesignWithoutSolidsIsComposedFromItsCage) {
+  const Scene s = grown_box_scene(0.1);
+  Inputs inputs{{s.name, s.design}, {}};
+  Options options;
+  options.incidence.tolerance = s.h;
+  const Result result = convert(inputs, options, Context());
+  Converted r = from_result("no solids", result, result.design);
+  expect_valid(r);
+  ASSERT_EQ(result.composed.contacts.size(), 1u) << joined(result.composed.report.diagnostics);
+  EXPECT_EQ(result.composed.contacts[0].surface, "closed shell");
+  EXPECT_EQ(result.fitted.size(), 1u);
+  EXPECT_EQ(exit_status(result), 0);
+  bool warned = false;
+  for (const auto& d : result.diagnostics) warned = warned || d.find("has no solids") != std::string::npos;
+  EXPECT_TRUE(warned) << joined(result.diagnostics);
+}

@@ -70,6 +70,11 @@ def test_partition_of_each_scene(native, scenes, scene, mode):
     # within 2% of the design's volume.
     composed = result["composed"]
     assert report["composed"]["ok"], report["diagnostics"]
+    # The status is the command line's: 3 exactly when some component fell back, each
+    # fallback named with its component.
+    assert result["status"] == (3 if result["fallbacks"] else 0)
+    assert result["fallbacks"] == report["composed"]["fallbacks"]
+    assert all(line.startswith("organic component ") for line in result["fallbacks"])
     counts = native.validate_mesh(composed["vertices"], composed["faces"])
     assert counts["closed_manifold"], counts
     assert counts["signed_volume"] == pytest.approx(report["inputs"]["design"]["volume"], rel=0.02)
@@ -160,10 +165,13 @@ def test_recompose_from_the_converted_cages(native, scenes):
     design, solids, (origin, h), _ = load_scene(native, scenes / "tube")
     result = native.convert(design, solids, {"tolerance": h})
     assert [c["surface"] for c in result["report"]["composed"]["contacts"]] == ["cage"]
+    # Made as asked: the command line's exit status 0, no fallback.
+    assert result["status"] == 0 and result["fallbacks"] == []
     cages = [{k: c[k] for k in ("name", "vertices", "faces", "crease_edges", "crease_values")}
              for c in result["cages"]]
     again = native.recompose(solids, cages)
     assert again["report"]["composed"]["ok"], again["report"]["diagnostics"]
+    assert again["status"] == 0 and again["fallbacks"] == []
     counts = native.validate_mesh(again["composed"]["vertices"], again["composed"]["faces"])
     assert counts["closed_manifold"] and counts["signed_volume"] > 0
     volume = result["report"]["composed"]["volume"]
