@@ -7,6 +7,7 @@ import os
 import sys
 
 import bpy
+import numpy as np
 import pytest
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
@@ -52,3 +53,21 @@ def scene_state():
     """Names of everything a conversion could add, to compare before and after."""
     return {kind: sorted(getattr(bpy.data, kind).keys())
             for kind in ("objects", "meshes", "collections", "materials")}
+
+
+def mesh_object(name, vertices, faces, role):
+    """A mesh object from triangle arrays, linked to the scene, with its genbrep role."""
+    mesh = bpy.data.meshes.new(name)
+    faces = np.asarray(faces, np.int32)
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", np.asarray(vertices, np.float32).ravel())
+    mesh.loops.add(3 * len(faces))
+    mesh.loops.foreach_set("vertex_index", faces.ravel())
+    mesh.polygons.add(len(faces))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(faces), 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(faces), 3, np.int32))
+    mesh.update(calc_edges=True)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.genbrep.role = role
+    return obj

@@ -13,7 +13,7 @@ import bpy
 import numpy as np
 import pytest
 
-from conftest import ROOT, needs_native, scene_state
+from conftest import ROOT, mesh_object, needs_native, scene_state
 
 pytestmark = needs_native
 
@@ -24,21 +24,6 @@ SCRIPT = os.path.join(ROOT, "scripts", "blender_convert.py")
 ROLES = {"keep_in": "KEEP_IN", "keep_out": "KEEP_OUT", "seed": "SEED"}
 
 
-def _object(name, vertices, faces, role):
-    mesh = bpy.data.meshes.new(name)
-    faces = np.asarray(faces, np.int32)
-    mesh.vertices.add(len(vertices))
-    mesh.vertices.foreach_set("co", np.asarray(vertices, np.float32).ravel())
-    mesh.loops.add(3 * len(faces))
-    mesh.loops.foreach_set("vertex_index", faces.ravel())
-    mesh.polygons.add(len(faces))
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(faces), 3, dtype=np.int32))
-    mesh.polygons.foreach_set("loop_total", np.full(len(faces), 3, np.int32))
-    mesh.update(calc_edges=True)
-    obj = bpy.data.objects.new(name, mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    obj.genbrep.role = role
-    return obj
 
 
 def _scene(case, tmp_path):
@@ -47,9 +32,9 @@ def _scene(case, tmp_path):
     import genbrep_native
     corpus.prepare(case, str(tmp_path))
     design, solids = corpus.inputs(case, str(tmp_path), genbrep_native.read_mesh)
-    _object(design["name"], design["vertices"], design["faces"], "DESIGN")
+    mesh_object(design["name"], design["vertices"], design["faces"], "DESIGN")
     for solid in solids:
-        _object(solid["name"], solid["vertices"], solid["faces"], ROLES[solid["role"]])
+        mesh_object(solid["name"], solid["vertices"], solid["faces"], ROLES[solid["role"]])
     bpy.context.scene.genbrep_settings.tolerance_auto = False
     bpy.context.scene.genbrep_settings.tolerance = corpus.TOLERANCE
     return design["name"]

@@ -6,7 +6,7 @@ import subprocess
 import bmesh
 import bpy
 
-from conftest import ROOT, fixture_path, needs_native
+from conftest import ROOT, fixture_path, mesh_object, needs_native
 
 pytestmark = needs_native
 
@@ -55,3 +55,23 @@ def test_batch_rejects_bad_arguments():
     run = _batch(fixture_path("boss"), "--until", "nowhere")
     assert run.returncode == 2
     assert "invalid choice" in run.stderr
+
+
+def test_batch_exits_three_on_a_fallback(empty_scene, tmp_path):
+    """A dome across a keep-in and a keep-out 0.003 apart (make_scenes' gap dome): the solid
+    is written from a lower tier, the script exits 3 and names each fallback."""
+    import genbrep_native
+    subprocess.run([os.path.join(ROOT, "build", "bin", "make_scenes"), str(tmp_path), "0.05", "gap",
+                    "0.003"], check=True)
+    folder = tmp_path / "gap_dome"
+    mesh_object("dome", *genbrep_native.read_mesh(str(folder / "design.obj")), "DESIGN")
+    mesh_object("boss", *genbrep_native.read_mesh(str(folder / "boss_keep_in.obj")), "KEEP_IN")
+    mesh_object("bolt", *genbrep_native.read_mesh(str(folder / "bolt_keep_out.obj")), "KEEP_OUT")
+    scene = str(tmp_path / "gap.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=scene)
+    out = tmp_path / "result.blend"
+    run = _batch(scene, "--out", str(out), "--tolerance", "0.05")
+    assert run.returncode == 3, run.stdout + run.stderr
+    assert out.exists()
+    fallbacks = [line for line in run.stderr.splitlines() if line.startswith("genbrep: fallback: 'dome' ")]
+    assert fallbacks and all("organic component 0: composed from the" in line for line in fallbacks), run.stderr

@@ -324,15 +324,10 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, ComposeFixturePipelines,
 // the dome's design region when the contact holds, else as the design Boolean, the
 // fallback naming the gap.
 TEST(Compose, TinyGapGivesASolidAndNamesTheGap) {
-  const double h = 0.05, gap = 0.003;
-  const Vec3 k_lo(-1, -0.6, -0.5), k_hi(0, 0.6, 0.5), l_lo(gap, -0.6, -0.5), l_hi(1, 0.6, 0.5);
-  auto f = [&](const Vec3& p) {
-    return std::max(std::min(box_sdf(p, k_lo, k_hi), sphere_sdf(p, Vec3(0, 0, 0.5), 0.45)), -box_sdf(p, l_lo, l_hi));
-  };
-  const Vec3 origin(-1.3 - 0.37 * h, -0.9 - 0.29 * h, -0.8 - 0.41 * h);
-  const TriangleMesh design = extract_level_set(f, origin, h, Eigen::Vector3i(48, 38, 38));
-  const std::vector<SolidInput> solids{{"boss", Role::KeepIn, box_mesh(k_lo, k_hi)},
-                                       {"bolt", Role::KeepOut, box_mesh(l_lo, l_hi)}};
+  const Scene s = gap_dome_scene(0.05, 0.003);
+  const TriangleMesh& design = s.design;
+  const std::vector<SolidInput>& solids = s.solids;
+  const double h = s.h;
   const Converted r = convert("tiny_gap", design, solids, h, true);
   const std::string diagnostics = joined(r.composed.report.diagnostics);
   std::printf("[compose] tiny_gap: floor=%d%s\n", r.composed.report.floor, diagnostics.c_str());

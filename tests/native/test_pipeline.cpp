@@ -308,16 +308,7 @@ TEST(Cli, ComposeRecomposesFromTheCagesConvertWrote) {
 // cannot be pulled across the gap, so the floor (the design Boolean) composes the solid,
 // and standard error says which component fell back and why, one line each.
 TEST(Cli, FallbackWritesTheSolidAndExitsThree) {
-  const double h = 0.05, gap = 0.003;
-  const Vec3 k_lo(-1, -0.6, -0.5), k_hi(0, 0.6, 0.5), l_lo(gap, -0.6, -0.5), l_hi(1, 0.6, 0.5);
-  auto f = [&](const Vec3& p) {
-    return std::max(std::min(box_sdf(p, k_lo, k_hi), sphere_sdf(p, Vec3(0, 0, 0.5), 0.45)), -box_sdf(p, l_lo, l_hi));
-  };
-  const Vec3 origin(-1.3 - 0.37 * h, -0.9 - 0.29 * h, -0.8 - 0.41 * h);
-  Scene s;
-  s.name = "dome";
-  s.design = extract_level_set(f, origin, h, Eigen::Vector3i(48, 38, 38));
-  s.solids = {{"boss", Role::KeepIn, box_mesh(k_lo, k_hi)}, {"bolt", Role::KeepOut, box_mesh(l_lo, l_hi)}};
+  const Scene s = gap_dome_scene(0.05, 0.003);
   const fs::path dir = temp_dir("fallback");
   const CliRun run = run_cli("convert " + write_scene(s, dir) + " --tolerance 0.05 --out " + (dir / "out").string(), dir);
   const auto report = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));

@@ -217,3 +217,19 @@ def test_cages_name_their_irregular_vertices_off_singularities(native, tmp_path)
     np.testing.assert_array_equal(pulled["irregular_off_singularities"], off)
     valence = np.bincount(pulled["faces"].ravel(), minlength=len(pulled["vertices"]))
     assert [valence[v] for v in off] == [point["valence"] for point in listed]
+
+
+def test_fallback_gives_a_solid_and_status_three(native, tmp_path):
+    """A dome across a keep-in and a keep-out 0.003 apart cannot be pulled across the gap:
+    the solid comes from a lower tier, status 3, each fallback named with its reason."""
+    subprocess.run([str(BUILD / "bin" / "make_scenes"), str(tmp_path), "0.05", "gap", "0.003"], check=True)
+    design, solids, (origin, h), _ = load_scene(native, tmp_path / "gap_dome")
+    result = native.convert(design, solids, {"tolerance": h})
+    composed = result["report"]["composed"]
+    assert composed["ok"], result["report"]["diagnostics"]
+    counts = native.validate_mesh(result["composed"]["vertices"], result["composed"]["faces"])
+    assert counts["closed_manifold"] and counts["signed_volume"] > 0
+    assert result["status"] == 3
+    assert result["fallbacks"] == composed["fallbacks"] and result["fallbacks"]
+    assert any("crosses a gap of 0.003 between" in line and "keep-in 'boss'" in line
+               and "keep-out 'bolt'" in line for line in result["fallbacks"]), result["fallbacks"]

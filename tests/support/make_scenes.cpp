@@ -1,5 +1,5 @@
-// make_scenes DIR [h] [net N] — writes the analytic level-set scenes of scenes.h (or only
-// the net of N × N cells) as OBJ files,
+// make_scenes DIR [h] [net N | gap G] — writes the analytic level-set scenes of scenes.h
+// (or only the net of N × N cells, or only the gap dome with gap G) as OBJ files,
 // DIR/<scene>/design.obj and DIR/<scene>/<solid>_<role>.obj, plus DIR/<scene>/grid.txt
 // ("ox oy oz h") and expected.txt ("components loops"). Used by the Python tests.
 #include <filesystem>
@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   std::vector<Scene> scenes;
   if (argc > 4 && std::string(argv[3]) == "net") {
     scenes.push_back(net_scene(h, std::stoi(argv[4])));
+  } else if (argc > 4 && std::string(argv[3]) == "gap") {
+    scenes.push_back(gap_dome_scene(h, std::stod(argv[4])));
   } else {
     for (Scene s : {grown_box_scene(h), tube_scene(h), two_arches_scene(h), eroded_seed_scene(h),
                     bolt_hole_scene(h)})

@@ -126,6 +126,19 @@ Scene eroded_seed_scene(double h) {
   return s;
 }
 
+Scene gap_dome_scene(double h, double gap) {
+  const Vec3 k_lo(-1, -0.6, -0.5), k_hi(0, 0.6, 0.5), l_lo(gap, -0.6, -0.5), l_hi(1, 0.6, 0.5);
+  auto f = [&](const Vec3& p) {
+    return std::max(std::min(box_sdf(p, k_lo, k_hi), sphere_sdf(p, Vec3(0, 0, 0.5), 0.45)), -box_sdf(p, l_lo, l_hi));
+  };
+  Scene s = extract("gap_dome", f, Vec3(-1.3, -0.9, -0.8), Vec3(1.1, 0.9, 1.1), h);
+  s.solids.push_back(solid("boss", Role::KeepIn, box_mesh(k_lo, k_hi)));
+  s.solids.push_back(solid("bolt", Role::KeepOut, box_mesh(l_lo, l_hi)));
+  s.expected_components = 1;
+  s.expected_loops = 1;
+  return s;
+}
+
 Scene bolt_hole_scene(double h) {
   const Vec3 lo(-1, -1, -0.5), hi(1, 1, 0.5);
   const Vec3 axis_base(0, 0, -1.0);

@@ -27,6 +27,10 @@ Scene tube_scene(double h);
 Scene two_arches_scene(double h);
 // A seed box with a spherical bite eroded from one corner: 1 component, 1 loop.
 Scene eroded_seed_scene(double h);
+// §9.1's gap: a keep-in box 'boss' and a keep-out box 'bolt' `gap` apart along x, an
+// organic dome across both (cut where it enters the bolt): 1 component, 1 loop that
+// borders both; its boundary cannot be pulled across the gap.
+Scene gap_dome_scene(double h, double gap);
 // A keep-in boss with organic material and a keep-out bolt hole through both.
 Scene bolt_hole_scene(double h);
 // A row of n arches joining n + 1 keep-in boxes at their feet (size scales with n).
