@@ -47,16 +47,10 @@ InexactMesh to_inexact(const TriangleMesh& mesh) {
 // The running Boolean G. `empty` until the first operand: ∅ ∪ X = X, ∅ \ X = ∅. Every
 // operand is checked against CGAL's preconditions first (operand.cpp); G itself is the
 // output of a corefinement, valid by construction. `why` says what failed.
-// Before each Boolean, vertices of either side within `snap` (1e-9 × the scene, the
-// tolerance to which faces are matched to solids) of the other are snapped onto it
-// (operand.cpp), and both sides checked again; if snapping broke a precondition the
-// unsnapped pair is used.
 struct Accumulator {
   ExactMesh mesh;
   bool empty = true;
   std::string why;
-  double snap = 0;
-  int snapped = 0;  // vertices moved by snapping, over all Booleans
 
   bool apply(ExactMesh operand, bool unite, const std::string& what) {
     const std::string unusable = detail::make_usable(&operand, true);
@@ -68,18 +62,8 @@ struct Accumulator {
       if (unite) mesh = std::move(operand), empty = false;
       return true;
     }
-    ExactMesh a = mesh, b = std::move(operand), out;
-    if (snap > 0) {
-      ExactMesh sa = a, sb = b;
-      const int moved = detail::snap_onto(&sb, sa, snap) + detail::snap_onto(&sa, sb, snap);
-      if (moved > 0 && detail::unusable_operand(sa, true).empty() && detail::unusable_operand(sb, true).empty()) {
-        a = std::move(sa), b = std::move(sb);
-        snapped += moved;
-      }
-    }
-    const bool ok = unite ? PMP::corefine_and_compute_union(a, b, out)
-                          : PMP::corefine_and_compute_difference(a, b, out);
-    if (!ok) {
+    ExactMesh out;
+    if (!detail::exact_boolean(mesh, operand, unite, &out)) {
       why = std::string(unite ? "uniting " : "subtracting ") + what + " gives a non-manifold result";
       return false;
     }
@@ -226,11 +210,6 @@ TriangleMesh canonical_order(const TriangleMesh& mesh) {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-std::string snapped_note(int snapped, double snap) {
-  return "operands that nearly coincide: " + std::to_string(snapped) + " vertices snapped onto the other operand "
-         "(by at most " + number(snap) + ") so that their faces coincide exactly";
 }
 
 // §8.2 as Booleans: G = (((P \ bites) ∪ additive Q) ∪ K) \ L. False with the reason in
@@ -401,9 +380,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   start = std::chrono::steady_clock::now();
   if (failed.empty()) {
     Accumulator g;
-    g.snap = 1e-9 * scale;
     if (classify(cells, solids, context, &report, &g)) {
-      if (g.snapped > 0) report.notes.push_back(snapped_note(g.snapped, g.snap));
       // Rule 4: a cell bounded by organic faces of both orientations (two organic cells
       // that overlap, or an organic surface running through a keep-in) is inside; say so.
       for (size_t a = 0; a < cells.size(); ++a) {
@@ -430,9 +407,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   if (!design) return out;
   // The floor: the whole design as an exact Boolean with the solids.
   Accumulator g;
-  g.snap = 1e-9 * scale;
   const bool ok = design_boolean(*design, solids, context, &g);
-  if (g.snapped > 0) report.notes.push_back(snapped_note(g.snapped, g.snap));
   report.seconds_boolean = seconds_since(start);
   if (!ok) {
     report.ok = false;

@@ -11,7 +11,6 @@
 #include <set>
 
 #include "compose/detail/exact.h"
-#include "mesh/mesh.h"
 
 namespace genbrep::detail {
 
@@ -61,20 +60,10 @@ ExactMesh solid_union(const std::vector<SolidInput>& solids, const std::vector<i
     GENBREP_CHECK(unusable.empty(), Code::StageFailure, "solid '" + solids[s].name + "' " + unusable);
     return mesh;
   };
-  // Solids that nearly coincide (a bolt in its bore) are snapped onto each other first, as
-  // compose() does before its Booleans (operand.cpp): δ = 1e-9 × their extent.
-  double scale = 0;
-  for (int s : members) scale = std::max(scale, bounding_box_diagonal(solids[s].mesh.vertices));
   ExactMesh result = checked(members.at(0));
   for (size_t i = 1; i < members.size(); ++i) {
     ExactMesh other = checked(members[i]), out;
-    ExactMesh snapped_result = result, snapped_other = other;
-    if (snap_onto(&snapped_other, snapped_result, 1e-9 * scale) + snap_onto(&snapped_result, snapped_other, 1e-9 * scale) > 0 &&
-        unusable_operand(snapped_result, true).empty() && unusable_operand(snapped_other, true).empty()) {
-      result = std::move(snapped_result);
-      other = std::move(snapped_other);
-    }
-    GENBREP_CHECK(PMP::corefine_and_compute_union(result, other, out), Code::StageFailure,
+    GENBREP_CHECK(exact_boolean(result, other, true, &out), Code::StageFailure,
                   "the union of the solids bordering a loop is not 2-manifold ('" +
                       solids[members[0]].name + "' and '" + solids[members[i]].name + "')");
     result = std::move(out);

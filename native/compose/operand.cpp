@@ -4,20 +4,14 @@
 // require closed meshes that bound a volume. Violating them is undefined behaviour: a
 // SIGSEGV inside the corefinement's intersection filter was seen on an unsmoothed voxel
 // bracket. Every operand is checked here first; a failed check takes the next tier.
-// Operands that nearly coincide are snapped onto each other first (snap_onto).
-#include <CGAL/AABB_face_graph_triangle_primitive.h>
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/repair_degeneracies.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 
-#include <array>
 #include <cmath>
-#include <optional>
 
 #include "compose/detail/exact.h"
 
@@ -53,53 +47,14 @@ std::string make_usable(ExactMesh* mesh, bool closed) {
   return unusable_operand(*mesh, closed);
 }
 
-int snap_onto(ExactMesh* a, const ExactMesh& b, double delta) {
-  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Plain = CGAL::Surface_mesh<Inexact::Point_3>;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Inexact, CGAL::AABB_face_graph_triangle_primitive<Plain>>>;
-  auto rounded = [](const ExactPoint& p) {
-    return Inexact::Point_3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
-  };
-  if (a->is_empty() || b.is_empty()) return 0;
-  Plain plain;
-  for (const auto v : b.vertices()) plain.add_vertex(rounded(b.point(v)));
-  for (const auto f : b.faces()) {
-    std::vector<Plain::Vertex_index> corners;
-    for (const auto v : CGAL::vertices_around_face(b.halfedge(f), b)) corners.emplace_back(v.idx());
-    plain.add_face(corners);
-  }
-  CGAL::Bbox_3 box = PMP::bbox(plain);
-  box = CGAL::Bbox_3(box.xmin() - delta, box.ymin() - delta, box.zmin() - delta, box.xmax() + delta,
-                     box.ymax() + delta, box.zmax() + delta);
-  Tree tree(faces(plain).first, faces(plain).second, plain);
-  tree.accelerate_distance_queries();
-  const Exact::FT squared_delta = Exact::FT(delta) * Exact::FT(delta);
-  int moved = 0;
-  for (const auto v : a->vertices()) {
-    const ExactPoint& p = a->point(v);
-    const Inexact::Point_3 q = rounded(p);
-    if (!CGAL::do_overlap(q.bbox(), box)) continue;
-    const auto [foot, face] = tree.closest_point_and_primitive(q);
-    if (CGAL::squared_distance(q, foot) > delta * delta) continue;
-    std::array<ExactPoint, 3> c;
-    int k = 0;
-    for (const auto w : CGAL::vertices_around_face(plain.halfedge(face), plain))
-      c[k++] = b.point(ExactMesh::Vertex_index(w.idx()));
-    // Onto a corner of the face within δ, else onto an edge's line within δ, else onto its
-    // plane: exactly, so that what was nearly coplanar is coplanar.
-    std::optional<ExactPoint> target;
-    for (int i = 0; i < 3 && !target; ++i)
-      if (CGAL::compare(CGAL::squared_distance(p, c[i]), squared_delta) != CGAL::LARGER) target = c[i];
-    for (int i = 0; i < 3 && !target; ++i) {
-      const Exact::Line_3 line(c[i], c[(i + 1) % 3]);
-      if (CGAL::compare(CGAL::squared_distance(p, line), squared_delta) != CGAL::LARGER) target = line.projection(p);
-    }
-    if (!target) target = Exact::Plane_3(c[0], c[1], c[2]).projection(p);
-    if (*target == p) continue;
-    a->point(v) = *target;
-    ++moved;
-  }
-  return moved;
+bool exact_boolean(const ExactMesh& a, const ExactMesh& b, bool unite, ExactMesh* out) {
+  ExactMesh x = a, y = b, result;
+  const bool ok = unite ? PMP::corefine_and_compute_union(x, y, result)
+                        : PMP::corefine_and_compute_difference(x, y, result);
+  // CGAL 5.5 can report success with an invalid halfedge structure: check what it returns.
+  if (!ok || !result.is_valid(false) || !CGAL::is_closed(result)) return false;
+  *out = std::move(result);
+  return true;
 }
 
 double signed_volume(const ExactMesh& m) {

@@ -17,6 +17,7 @@
 #include <cmath>
 
 #include "compose/detail/exact.h"
+#include "mesh/mesh.h"
 
 namespace genbrep::detail {
 
@@ -75,26 +76,21 @@ Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
 
 namespace {
 
-bool crosses_itself(const TriangleMesh& mesh) {
-  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
-  CGAL::Surface_mesh<Inexact::Point_3> m;
+using Plain = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
+
+Plain to_plain(const TriangleMesh& mesh) {
+  Plain m;
   for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
-    m.add_vertex(Inexact::Point_3(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)));
+    m.add_vertex(Plain::Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)));
   for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
     m.add_face(CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 0))),
                CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 1))),
                CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 2))));
-  return CGAL::Polygon_mesh_processing::does_self_intersect(m);
+  return m;
 }
 
-double enclosed_volume(const TriangleMesh& mesh) {
-  double six = 0;
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
-    const Vec3 a = mesh.vertices.row(mesh.triangles(t, 0)), b = mesh.vertices.row(mesh.triangles(t, 1)),
-               c = mesh.vertices.row(mesh.triangles(t, 2));
-    six += a.dot(b.cross(c));
-  }
-  return six / 6;
+bool crosses_itself(const TriangleMesh& mesh) {
+  return CGAL::Polygon_mesh_processing::does_self_intersect(to_plain(mesh));
 }
 
 // CGAL's local repair of the faces that cross: removes them and a few rings around them
@@ -103,14 +99,7 @@ double enclosed_volume(const TriangleMesh& mesh) {
 // envelope). Replaces out->mesh when the result is closed and the change local.
 void repair_locally(Rounded* out, double envelope) {
   namespace PMP = CGAL::Polygon_mesh_processing;
-  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
-  CGAL::Surface_mesh<Inexact::Point_3> m;
-  for (Eigen::Index v = 0; v < out->mesh.vertices.rows(); ++v)
-    m.add_vertex(Inexact::Point_3(out->mesh.vertices(v, 0), out->mesh.vertices(v, 1), out->mesh.vertices(v, 2)));
-  for (Eigen::Index t = 0; t < out->mesh.triangles.rows(); ++t)
-    m.add_face(CGAL::SM_Vertex_index(static_cast<unsigned>(out->mesh.triangles(t, 0))),
-               CGAL::SM_Vertex_index(static_cast<unsigned>(out->mesh.triangles(t, 1))),
-               CGAL::SM_Vertex_index(static_cast<unsigned>(out->mesh.triangles(t, 2))));
+  Plain m = to_plain(out->mesh);
   bool repaired = false;
   // Its smoothing checks for degenerate faces with CGAL_warning (printed, not thrown) and
   // goes on; the result is checked here.
@@ -124,19 +113,6 @@ void repair_locally(Rounded* out, double envelope) {
   CGAL::set_warning_handler(previous);
   if (!repaired || !CGAL::is_closed(m)) return;
   m.collect_garbage();
-  // Local means local: a repair that changed more than 1% of the faces or 0.1% of the
-  // volume (hole filling can close over a whole region) is not taken.
-  const double before = enclosed_volume(out->mesh);
-  double after = 0;
-  for (const auto f : m.faces()) {
-    const auto h = m.halfedge(f);
-    const auto &a = m.point(m.source(h)), &b = m.point(m.target(h)), &c = m.point(m.target(m.next(h)));
-    after += Vec3(a.x(), a.y(), a.z()).dot(Vec3(b.x(), b.y(), b.z()).cross(Vec3(c.x(), c.y(), c.z()))) / 6;
-  }
-  const double faces_before = static_cast<double>(out->mesh.triangles.rows());
-  if (std::abs(static_cast<double>(m.number_of_faces()) - faces_before) > 0.01 * faces_before ||
-      std::abs(after - before) > 1e-3 * std::abs(before))
-    return;
   TriangleMesh mesh;
   mesh.vertices.resize(static_cast<Eigen::Index>(m.number_of_vertices()), 3);
   for (const auto v : m.vertices()) {
@@ -150,6 +126,13 @@ void repair_locally(Rounded* out, double envelope) {
       mesh.triangles(static_cast<Eigen::Index>(f.idx()), k++) = static_cast<int>(v.idx());
     mesh.triangle_source.push_back(static_cast<int>(f.idx()));
   }
+  // Local means local: a repair that changed more than 1% of the faces or 0.1% of the
+  // volume (hole filling can close over a whole region) is not taken.
+  const double before = validate(out->mesh).signed_volume, after = validate(mesh).signed_volume;
+  const double faces_before = static_cast<double>(out->mesh.triangles.rows());
+  if (std::abs(static_cast<double>(mesh.triangles.rows()) - faces_before) > 0.01 * faces_before ||
+      std::abs(after - before) > 1e-3 * std::abs(before))
+    return;
   out->mesh = std::move(mesh);
   out->repaired = true;
   out->intersecting = crosses_itself(out->mesh);

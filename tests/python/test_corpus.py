@@ -16,13 +16,12 @@ CORPUS = ROOT / "bench" / "corpus"
 # Seeds whose designs convert in well under a minute. Per check, why it fails today on a
 # seed (seeds not named pass).
 SEEDS = (8, 53, 123, 127)
-NO_SOLID = "no composed solid: "
+FLOOR = "a component has no working tier, so the solid is the design Boolean: "
 FAILS = {
-    "converts": {8: "fit stops the conversion: a cage boundary chain of 2 vertices"},
-    "valid": {8: NO_SOLID + "the conversion stops in fit",
-              53: NO_SOLID + "the pulled cage and the design-region stand-in both intersect themselves"},
-    "volume": {8: NO_SOLID + "the conversion stops in fit",
-               53: NO_SOLID + "the pulled cage and the design-region stand-in both intersect themselves",
+    "as_asked": {8: FLOOR + "component 0's design region folds after the pull (its cage too)",
+                 53: FLOOR + "component 0's pulled cage and design region both intersect themselves"},
+    "volume": {8: "the design Boolean is 2.8% larger than the design (the keep-ins restore cut corners)",
+               53: "the design Boolean is 4.7% larger than the design (the keep-ins restore cut corners)",
                123: "the composed solid is 5% smaller than the design",
                127: "the composed solid is 8% smaller than the design"},
 }
@@ -66,14 +65,20 @@ def test_no_conversion_crashes_or_hangs(corpus_run, seed):
     assert not record["timed_out"]
 
 
-@pytest.mark.parametrize("seed", seeds("converts"))
+@pytest.mark.parametrize("seed", SEEDS)
 def test_valid_input_converts(corpus_run, seed):
+    """A solid is written: exit 0, or 3 where some component fell back (each listed)."""
     record = corpus_run[f"s{seed:03d}"]
     assert record["judge"]["inputs"]["design"]["closed"]
-    assert record["exit"] == 0, record["diagnostics"][-3:]
+    assert record["exit"] in (0, 3), record["diagnostics"][-3:]
 
 
-@pytest.mark.parametrize("seed", seeds("valid"))
+@pytest.mark.parametrize("seed", seeds("as_asked"))
+def test_every_component_composes_from_its_best_tier(corpus_run, seed):
+    assert corpus_run[f"s{seed:03d}"]["exit"] == 0
+
+
+@pytest.mark.parametrize("seed", SEEDS)
 def test_the_composed_solid_is_valid(corpus_run, seed):
     record = corpus_run[f"s{seed:03d}"]
     result = record["judge"]["result"]

@@ -56,12 +56,9 @@ std::string unusable_operand(const ExactMesh& mesh, bool closed);
 // surface keeps its shape), which the mesh stage accepts and CGAL does not.
 std::string make_usable(ExactMesh* mesh, bool closed);
 
-// Snaps the vertices of `a` within `delta` of `b` onto it, exactly: onto a corner of b's
-// nearest face within δ, else onto the line of one of its edges within δ, else onto its
-// plane. Faces that nearly coincide (a bolt in its bore, a wall 1e-16 off another) then
-// coincide exactly, and corefinement resolves them as coplanar instead of cutting slivers
-// thinner than double precision. Returns how many vertices moved (each by at most δ).
-int snap_onto(ExactMesh* a, const ExactMesh& b, double delta);
+// a ∪ b (unite) or a \ b, exactly, both closed and usable (make_usable). The result is
+// checked (a valid, closed halfedge mesh); false when it is not one.
+bool exact_boolean(const ExactMesh& a, const ExactMesh& b, bool unite, ExactMesh* out);
 
 // Signed volume of a closed mesh. Summed in doubles: PMP::volume in the exact kernel
 // builds one lazy sum over every face and evaluates it exactly (11 s of the 5 x 5 net's
