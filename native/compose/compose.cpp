@@ -45,15 +45,16 @@ InexactMesh to_inexact(const TriangleMesh& mesh) {
 }
 
 // The running Boolean G. `empty` until the first operand: ∅ ∪ X = X, ∅ \ X = ∅. Every
-// operand is checked against CGAL's preconditions first (operand.cpp); G itself is the
-// output of a corefinement, valid by construction. `why` says what failed.
+// operand is checked against CGAL's preconditions first (operand.cpp), unless `checked`
+// says it already was; G itself is the output of a corefinement, checked by
+// exact_boolean. `why` says what failed.
 struct Accumulator {
   ExactMesh mesh;
   bool empty = true;
   std::string why;
 
-  bool apply(ExactMesh operand, bool unite, const std::string& what) {
-    const std::string unusable = detail::make_usable(&operand, true);
+  bool apply(ExactMesh operand, bool unite, const std::string& what, bool checked = false) {
+    const std::string unusable = checked ? std::string() : detail::make_usable(&operand, true);
     if (!unusable.empty()) {
       why = what + " " + unusable;
       return false;
@@ -231,7 +232,7 @@ bool classify(const std::vector<detail::OrganicCell>& cells, const SolidSet& sol
       ++report->organic_cells;
       ExactMesh operand = c.closed;
       if (!additive) PMP::reverse_face_orientations(operand);  // the bite as a solid
-      ok = g->apply(operand, additive, "organic component " + std::to_string(c.component));
+      ok = g->apply(operand, additive, "organic component " + std::to_string(c.component), c.usable);
     }
   };
   solid_pass(Role::Seed, true);

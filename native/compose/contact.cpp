@@ -296,12 +296,17 @@ ContactCut cut_at_contact(const OrganicSheet& pulled, const ExactMesh& solid_uni
     cut.problem = "the trimmed organic surface and its caps on ∂S do not close";
     return cut;
   }
-  if (PMP::does_self_intersect(cut.cell.closed)) {
-    cut.problem = "the organic cell (trimmed surface and caps) intersects itself";
-    return cut;
-  }
+  // Checked once here, as the Boolean operand it becomes (a bite turned inside out).
   cut.cell.volume = signed_volume(cut.cell.closed);
   cut.cell.additive = cut.cell.volume > 0;
+  if (!cut.cell.additive) PMP::reverse_face_orientations(cut.cell.closed);
+  const std::string unusable = make_usable(&cut.cell.closed, true);
+  if (!cut.cell.additive) PMP::reverse_face_orientations(cut.cell.closed);
+  if (!unusable.empty()) {
+    cut.problem = "the organic cell (trimmed surface and caps) " + unusable;
+    return cut;
+  }
+  cut.cell.usable = true;
   cut.has_cell = true;
   return cut;
 }

@@ -86,6 +86,7 @@ ComponentContact closed_shell(const OrganicSheet& sheet, detail::OrganicCell* ce
   cell->trimmed = closed;
   cell->volume = detail::signed_volume(closed);
   cell->additive = cell->volume > 0;
+  cell->usable = cell->additive;  // checked as it is; a void is checked turned inside out
   out.established = true;
   out.additive = cell->additive;
   out.cell_volume = cell->volume;

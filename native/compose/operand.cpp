@@ -11,7 +11,10 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
 #include <cmath>
+#include <optional>
 
 #include "compose/detail/exact.h"
 
@@ -19,7 +22,32 @@ namespace genbrep::detail {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 
-std::string unusable_operand(const ExactMesh& mesh, bool closed) {
+namespace {
+
+using Plain = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
+
+// `mesh` with the same combinatorics in the double kernel when every point is exactly a
+// double (input solids, pulled cage tessellations), else nothing. Its predicates are exact
+// too, so the checks answer the same, without building lazy exact numbers per test.
+std::optional<Plain> as_doubles(const ExactMesh& mesh) {
+  if (mesh.has_garbage()) return std::nullopt;
+  Plain plain;
+  for (const auto v : mesh.vertices()) {
+    const ExactPoint& p = mesh.point(v);
+    const double x = CGAL::to_double(p.x()), y = CGAL::to_double(p.y()), z = CGAL::to_double(p.z());
+    if (ExactPoint(x, y, z) != p) return std::nullopt;
+    plain.add_vertex(Plain::Point(x, y, z));
+  }
+  for (const auto f : mesh.faces()) {
+    std::vector<Plain::Vertex_index> corners;
+    for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) corners.emplace_back(v.idx());
+    if (plain.add_face(corners) == Plain::null_face()) return std::nullopt;
+  }
+  return plain;
+}
+
+template <class Mesh>
+std::string unusable(const Mesh& mesh, bool closed) {
   if (mesh.is_empty()) return "is empty";
   if (!CGAL::is_triangle_mesh(mesh)) return "is not a triangle mesh";
   if (!mesh.is_valid(false)) return "is not a valid halfedge mesh";
@@ -27,11 +55,20 @@ std::string unusable_operand(const ExactMesh& mesh, bool closed) {
   for (const auto f : mesh.faces()) degenerate += PMP::is_degenerate_triangle_face(f, mesh);
   if (degenerate > 0) return "has " + std::to_string(degenerate) + " degenerate triangles";
   if (closed && !CGAL::is_closed(mesh)) return "is not closed";
-  std::vector<std::pair<ExactMesh::Face_index, ExactMesh::Face_index>> pairs;
+  std::vector<std::pair<typename Mesh::Face_index, typename Mesh::Face_index>> pairs;
   PMP::self_intersections(mesh, std::back_inserter(pairs));
   if (!pairs.empty()) return "intersects itself (" + std::to_string(pairs.size()) + " triangle pairs)";
   if (closed && !PMP::does_bound_a_volume(mesh)) return "does not bound a volume";
   return {};
+}
+
+}  // namespace
+
+std::string unusable_operand(const ExactMesh& mesh, bool closed) {
+  if (mesh.is_empty()) return "is empty";
+  if (!mesh.is_valid(false)) return "is not a valid halfedge mesh";
+  if (const auto plain = as_doubles(mesh)) return unusable(*plain, closed);
+  return unusable(mesh, closed);
 }
 
 std::string make_usable(ExactMesh* mesh, bool closed) {

@@ -43,9 +43,9 @@ struct Rounded {
 };
 Rounded round_to_doubles(ExactMesh mesh, double tolerance);
 
-// round_to_doubles at 1e-10 × `scale`; where the rounded mesh crosses itself, CGAL's local
-// repair of the crossing faces, then (at most 2 rounds) back to exact, autorefined, the
-// cut-off patches removed, rounded and repaired again (round.cpp).
+// round_to_doubles at 1e-10 × `scale`; where the rounded mesh crosses itself, at most 2
+// rounds of: back to exact, autorefined, the cut-off patches removed, rounded again; what
+// still crosses then gets CGAL's local repair of the crossing faces (round.cpp).
 Rounded round_robustly(const ExactMesh& exact, double scale);
 
 // Why `mesh` may not enter corefinement (operand.cpp), in words after its name ("is not
@@ -81,6 +81,7 @@ struct OrganicCell {
   ExactMesh trimmed;         // T_c = O_c cut at C, the part the result keeps
   bool additive = true;      // Q_c encloses positive volume: material, else a bite
   double volume = 0;         // signed, design units³
+  bool usable = false;       // `closed`, as a Boolean operand, passed make_usable
 };
 
 // Result of cutting one pulled sheet at ∂S: contact polylines (per sheet loop, -1 where
