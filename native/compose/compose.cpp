@@ -352,6 +352,41 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
             return detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, c);
           },
           component, "cage", &cell);
+      // Tier 2: the cage extended into its solids by one row of quads, where pulling the
+      // fitted boundary in folds or stops short.
+      if (!contact.established) {
+        Diagnostics why = contact.diagnostics;
+        ComponentContact extended = attempt(
+            [&](detail::OrganicCell* c) {
+              const ExtendedCage e = extend_cage(*surface.cage, surface.chain_solids, solids);
+              if (!e.extended) {
+                ComponentContact none;
+                none.component = component;
+                none.diagnostics.push_back("organic component " + std::to_string(component) +
+                                           ": its cage cannot be extended into the solids: " + e.problem);
+                return none;
+              }
+              ComponentContact r = detail::establish_cage(e.cage, surface.chain_solids, solids, options, c, e.sides);
+              r.surface = "extended cage";
+              return r;
+            },
+            component, "extended cage", &cell);
+        if (extended.established) {
+          extended.fallback = "its cage as fitted could not be pulled into the solids" +
+                              (why.empty() ? std::string() : " (" + why.front() + ")") +
+                              "; extended into them by a row of quads";
+          extended.diagnostics.insert(extended.diagnostics.begin(),
+                                      "organic component " + std::to_string(component) +
+                                          ": its cage as fitted could not be pulled into the solids, composed "
+                                          "from the cage extended into them");
+          for (size_t k = 0; k < why.size(); ++k) {
+            extended.diagnostics.insert(extended.diagnostics.begin() + 1 + static_cast<long>(k), "  cage: " + why[k]);
+          }
+          contact = std::move(extended);
+        } else {
+          for (const auto& d : extended.diagnostics) contact.diagnostics.push_back(d);
+        }
+      }
       if (!contact.established && has_sheet) {
         Diagnostics why = contact.diagnostics;
         contact = attempt(region, component, "design region", &cell);

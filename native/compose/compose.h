@@ -22,7 +22,8 @@
 // Guarantees: faces on input solids carry the input's vertex positions (new vertices lie
 // only on intersection curves); the report is measured on the returned double mesh.
 // Tiers. Each component is composed from the best surface that works: its pulled fitted
-// cage ("cage"), else its design region ("design region"); a component with no boundary on
+// cage ("cage"), else that cage extended into its solids by a row of quads and pulled
+// ("extended cage", pull/extend.cpp), else its design region ("design region"); a component with no boundary on
 // a solid (a closed organic shell) is its own closed cell. When a component has no tier
 // that works, or the Booleans or the rounding cannot give a valid solid, and the design
 // is given, the floor takes over: the exact Boolean (D ∪ K) \ L of the design with the
@@ -66,11 +67,11 @@ struct ComponentContact {
   bool additive = true;        // Q encloses material (else a bite out of a seed)
   double cell_volume = 0;      // signed volume of Q, design units³
   OrganicSheet pulled;         // the pulled sheet (a cage: its pulled limit tessellation)
-  // What was composed: "cage", "design region", "closed shell" (a cage's or the design's
-  // closed component) or "design Boolean" (the floor).
+  // What was composed: "cage", "extended cage", "design region", "closed shell" (a cage's
+  // or the design's closed component) or "design Boolean" (the floor).
   std::string surface = "design region";
   std::string fallback;        // why a lower tier than the component's best was used; empty if none
-  QuadCage cage;               // surface == "cage": the pulled cage (matches `pulled`)
+  QuadCage cage;               // surface "cage" or "extended cage": the pulled cage (matches `pulled`)
   std::vector<double> max_distance_before;  // per loop: max F on the boundary before the pull
   std::vector<double> max_distance_after;   // and after (≤ η when established)
   std::vector<ContactCurve> curves;

@@ -104,13 +104,13 @@ ComponentContact detail::establish(const OrganicSheet& sheet, const SolidSet& so
 
 ComponentContact detail::establish_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
                                         const SolidSet& solids, const ComposeOptions& options,
-                                        OrganicCell* cell) {
+                                        OrganicCell* cell, const std::vector<int>& sides) {
   QuadCage last;
   const OrganicSheet sheet = cage_sheet(cage, chain_solids, options.pull.cage_samples_per_edge);
   ComponentContact out = establish_with(
       sheet,
       [&](double eta) {
-        CagePull pulled = pull_cage(cage, chain_solids, solids, eta, options.pull);
+        CagePull pulled = pull_cage(cage, chain_solids, solids, eta, options.pull, sides);
         last = std::move(pulled.cage);
         return std::move(pulled.sheet);
       },

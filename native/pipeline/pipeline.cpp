@@ -58,7 +58,8 @@ std::vector<QuadCage> final_cages(const Result& result) {
   for (const auto& f : result.fitted) {
     cages.push_back(f.cage);
     for (const auto& contact : result.composed.contacts) {
-      if (contact.component == f.cage.component && contact.surface == "cage" && contact.established) {
+      if (contact.component == f.cage.component && (contact.surface == "cage" || contact.surface == "extended cage") &&
+          contact.established) {
         cages.back() = contact.cage;
       }
     }

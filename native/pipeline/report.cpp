@@ -10,7 +10,8 @@ namespace {
 using json = nlohmann::ordered_json;
 
 // The "composed" section: checks measured on the composed mesh, and per component which
-// surface was composed (its tier: "cage", the pulled fitted cage; "design region"; "closed
+// surface was composed (its tier: "cage", the pulled fitted cage; "extended cage", the cage
+// extended into its solids by a row of quads and pulled; "design region"; "closed
 // shell"; "design Boolean", the floor) and, below its best tier, why ("fallback").
 json composed_json(const Result& result) {
   const ComposeReport& c = result.composed.report;
@@ -26,7 +27,7 @@ json composed_json(const Result& result) {
                   {"max_distance_before", contact.max_distance_before},
                   {"max_distance_after", contact.max_distance_after}};
     if (!contact.fallback.empty()) entry["fallback"] = contact.fallback;
-    if (contact.surface == "cage") {
+    if (contact.surface == "cage" || contact.surface == "extended cage") {
       entry["control_points"] = contact.cage.vertices.rows();
       entry["quads"] = contact.cage.quads.rows();
     }

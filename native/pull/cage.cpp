@@ -324,7 +324,8 @@ namespace {
 
 // One pull of `cage` (no insertion): the §7.2 descent, the fade, the re-pull rounds.
 CagePull pull_once(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
-                   const SolidSet& solids, double eta, const PullOptions& options) {
+                   const SolidSet& solids, double eta, const PullOptions& options,
+                   const std::vector<int>& known_sides) {
   GENBREP_CHECK(chain_solids.size() == cage.boundary_chains.size(), Code::Internal,
                 "pull_cage needs the solids of every boundary chain");
   const int n = std::max(1, options.cage_samples_per_edge);
@@ -339,7 +340,9 @@ CagePull pull_once(const QuadCage& cage, const std::vector<std::vector<int>>& ch
   std::vector<BoundaryCurve> curves;
   for (size_t c = 0; c < cage.boundary_chains.size(); ++c) {
     const SideDistance probe(solids, chain_solids[c], 1);
-    sides.push_back(detail::organic_side(original_sheet, original_sheet.loops[c], adjacency, probe));
+    sides.push_back(c < known_sides.size()
+                        ? known_sides[c]
+                        : detail::organic_side(original_sheet, original_sheet.loops[c], adjacency, probe));
     distances.emplace_back(solids, chain_solids[c], sides.back());
     curves.push_back(chain_curve(surface, cage.boundary_chains[c], edges, n, std::max(1, options.samples_per_edge)));
   }
@@ -439,12 +442,13 @@ CagePull pull_once(const QuadCage& cage, const std::vector<std::vector<int>>& ch
 }  // namespace
 
 CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
-                   const SolidSet& solids, double eta, const PullOptions& options) {
+                   const SolidSet& solids, double eta, const PullOptions& options,
+                   const std::vector<int>& sides) {
   const int n = std::max(1, options.cage_samples_per_edge),
             sub = std::max(1, options.samples_per_edge);
   QuadCage current = cage;
   std::vector<int> inserted(cage.boundary_chains.size(), 0);
-  CagePull out = pull_once(current, chain_solids, solids, eta, options);
+  CagePull out = pull_once(current, chain_solids, solids, eta, options, sides);
   const Eigen::Index quad_limit =
       static_cast<Eigen::Index>(
           std::ceil(options.max_insertion_growth * static_cast<double>(cage.quads.rows()))) +
@@ -470,7 +474,7 @@ CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& ch
     }
     for (size_t c = 0; c < inserted.size(); ++c) inserted[c] += refined.inserted_per_chain[c];
     current = std::move(refined.cage);
-    out = pull_once(current, chain_solids, solids, eta, options);
+    out = pull_once(current, chain_solids, solids, eta, options, sides);
   }
   std::string counts;
   int total = 0;

@@ -203,7 +203,31 @@ struct CagePull {
 // start: at most options.max_insertions rounds. The returned cage is the refined one (its
 // topology can differ from `cage`); LoopPull::inserted_vertices counts per chain and a
 // diagnostic names the chains that got vertices.
+// `sides`: σ per chain when the caller knows it (an extended cage's chains lie inside their
+// solids, so the rings next to them cannot tell); empty: from the cage as above.
 CagePull pull_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
-                   const SolidSet& solids, double eta, const PullOptions& options);
+                   const SolidSet& solids, double eta, const PullOptions& options,
+                   const std::vector<int>& sides = {});
+
+// A cage extended into its solids (extend.cpp): one row of quads beyond every boundary
+// chain, each new vertex out from its chain vertex to the first point half a local chain
+// edge deep inside the chain's solids (F = σ·D_S as for the pull), or the deepest one where
+// the solid is thinner, at most 8 chain edges out: across the chain (away from its quads'
+// centroids), else half way to the solid's inward normal, else along it, per vertex and
+// then one direction for the whole chain, directions smoothed and widths evened along the
+// chain; the first row whose control polygon crosses neither itself nor the quads at the
+// chain. The fitted quads keep their control points; the
+// chains become the new rows (same order and orientation, same chain_loop); creases stay.
+// For where the fitted boundary is too far outside its solids for the pull's fade: the
+// extension's boundary starts inside them and the pull only corrects it.
+struct ExtendedCage {
+  QuadCage cage;
+  std::vector<int> sides;  // σ per chain, from the cage before the extension
+  bool extended = false;
+  double widest = 0;    // largest row width, design units
+  std::string problem;  // why not extended, in words
+};
+ExtendedCage extend_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
+                         const SolidSet& solids);
 
 }  // namespace genbrep

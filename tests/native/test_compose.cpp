@@ -621,6 +621,69 @@ TEST(BoundaryInsertion, PullConvergesOnlyWithInsertion) {
   EXPECT_NE(refined.sheet.diagnostics.back().find("boundary vertices inserted"), std::string::npos);
 }
 
+// ---- A cage extended into its solids (the tier below the fitted cage) ----
+
+namespace {
+
+// A tube cage (radius 1, z ∈ [0, 4]) whose bottom ring stops 0.6 short of a keep-in foot and
+// whose top ring lies 0.1 inside a keep-in head.
+struct ShortTube {
+  QuadCage cage = tube_cage(12, 4);
+  std::vector<SolidInput> inputs{
+      {"foot", Role::KeepIn, prepare_closed_mesh(box_mesh(Vec3(-2, -2, -1.6), Vec3(2, 2, -0.6)), "foot", nullptr)},
+      {"head", Role::KeepIn, prepare_closed_mesh(box_mesh(Vec3(-2, -2, 3.9), Vec3(2, 2, 5)), "head", nullptr)}};
+  std::vector<std::vector<int>> chain_solids{{0}, {1}};
+};
+
+}  // namespace
+
+TEST(ExtendedCage, ARowOfQuadsReachesIntoEachChainsSolidAndTheFittedQuadsStay) {
+  const ShortTube t;
+  const SolidSet solids(t.inputs, nullptr);
+  const ExtendedCage e = extend_cage(t.cage, t.chain_solids, solids);
+  ASSERT_TRUE(e.extended) << e.problem;
+  EXPECT_EQ(cage_problems(e.cage), "");
+  EXPECT_EQ(e.cage.quads.rows(), t.cage.quads.rows() + 24);  // one row of 12 per chain
+  EXPECT_EQ(e.cage.quads.topRows(t.cage.quads.rows()), t.cage.quads);
+  EXPECT_EQ(e.cage.vertices.topRows(t.cage.vertices.rows()), t.cage.vertices);
+  EXPECT_EQ(e.sides, (std::vector<int>{1, 1}));
+  // Independently of pull/: every new chain vertex is inside its own box, and no further
+  // out than the 8 chain edges the extension allows.
+  const double chain_edge = 2 * std::sin(M_PI / 12);
+  for (size_t c = 0; c < 2; ++c) {
+    ASSERT_EQ(e.cage.boundary_chains[c].size(), t.cage.boundary_chains[c].size());
+    for (size_t i = 0; i < e.cage.boundary_chains[c].size(); ++i) {
+      const Vec3 p = e.cage.vertices.row(e.cage.boundary_chains[c][i]).transpose();
+      const Vec3 from = t.cage.vertices.row(t.cage.boundary_chains[c][i]).transpose();
+      if (c == 0) EXPECT_LT(p.z(), -0.6) << "bottom chain vertex " << i << " at " << p.transpose();
+      if (c == 1) EXPECT_GT(p.z(), 3.9) << "top chain vertex " << i << " at " << p.transpose();
+      EXPECT_LE((p - from).norm(), 8 * chain_edge + 1e-9);
+    }
+  }
+}
+
+TEST(ExtendedCage, ACageShortOfItsKeepInComposesFromItsOwnQuads) {
+  const ShortTube t;
+  const SolidSet solids(t.inputs, nullptr);
+  OrganicSurface surface;
+  surface.sheet.component = 0;
+  surface.cage = t.cage;
+  surface.chain_solids = t.chain_solids;
+  const Composed composed = compose({surface}, solids, {}, Context());
+  ASSERT_TRUE(composed.report.ok) << joined(composed.report.diagnostics);
+  ASSERT_EQ(composed.contacts.size(), 1u);
+  const ComponentContact& contact = composed.contacts[0];
+  EXPECT_TRUE(contact.surface == "cage" || contact.surface == "extended cage") << contact.surface;
+  if (contact.surface == "extended cage") EXPECT_FALSE(contact.fallback.empty());
+  const MeshValidation v = validate(composed.mesh);
+  EXPECT_TRUE(v.closed_manifold());
+  EXPECT_FALSE(composed.report.self_intersecting);
+  // The boxes, and the tube between them (limit radius about 0.95 over 4.5 units of
+  // length: about 12.9) at least over 3.8 units.
+  const double boxes = 16 * 1.0 + 16 * 1.1;
+  EXPECT_GT(v.signed_volume, boxes + 0.8 * M_PI * 3.8) << v.signed_volume;
+}
+
 // ---- Composition from fitted cages (pipeline) and recompose from edited cages ----
 
 namespace {

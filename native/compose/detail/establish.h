@@ -18,7 +18,9 @@ ComponentContact establish_with(const OrganicSheet& sheet, const SheetPuller& pu
                                 const ComposeOptions& options, OrganicCell* cell);
 
 // The same for a cage (pull_cage); contact.cage is the pulled cage that was established.
+// `sides`: σ per chain when known (pull_cage).
 ComponentContact establish_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
-                                const SolidSet& solids, const ComposeOptions& options, OrganicCell* cell);
+                                const SolidSet& solids, const ComposeOptions& options, OrganicCell* cell,
+                                const std::vector<int>& sides = {});
 
 }  // namespace genbrep::detail
