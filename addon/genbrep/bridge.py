@@ -13,9 +13,6 @@ from . import checks, options, props, results
 _LOOP_TOTAL_WRITABLE = not bpy.types.MeshPolygon.bl_rna.properties["loop_total"].is_readonly
 _EDGE_CREASE_PROPERTY = "crease" in bpy.types.MeshEdge.bl_rna.properties
 
-PARTITION_MATERIAL = "genbrep partition"
-
-
 # reading --------------------------------------------------------------------------------
 
 def read_triangles(obj, depsgraph):
@@ -134,6 +131,9 @@ def replace_mesh_data(obj, vertices, faces):
     for material in old.materials:
         mesh.materials.append(material)
     obj.data = mesh
+    for child in obj.children:  # the cage's control net draws the same mesh
+        if child.data == old:
+            child.data = mesh
     set_group_weights(obj, weights)
     if old.users == 0:
         bpy.data.meshes.remove(old)
@@ -213,22 +213,9 @@ def add_subdivision(obj, subdivision):
     return modifier
 
 
-def _partition_material():
-    """Material showing the partition colour attribute (created once, shared by runs)."""
-    material = bpy.data.materials.get(PARTITION_MATERIAL)
-    if material is None:
-        material = bpy.data.materials.new(PARTITION_MATERIAL)
-        material.use_nodes = True
-        nodes, links = material.node_tree.nodes, material.node_tree.links
-        shader = next(n for n in nodes if n.type == "BSDF_PRINCIPLED")
-        attribute = nodes.new("ShaderNodeAttribute")
-        attribute.attribute_name = results.PARTITION_COLOR_ATTRIBUTE
-        attribute.location = (shader.location.x - 250, shader.location.y)
-        links.new(attribute.outputs["Color"], shader.inputs["Base Color"])
-    return material
-
-
 def _colour_material(name, colour):
+    """A material of one colour, in the viewport (Solid shading, colour Material) and in
+    renders."""
     material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
     material.diffuse_color = colour
     material.use_nodes = True
@@ -236,6 +223,13 @@ def _colour_material(name, colour):
     if shader is not None:
         shader.inputs["Base Color"].default_value = colour
     return material
+
+
+def _set_face_materials(mesh, face_material, materials):
+    """materials: (name, RGBA) per material slot; face_material: the slot of each face."""
+    for name, colour in materials:
+        mesh.materials.append(_colour_material(name, colour))
+    mesh.polygons.foreach_set("material_index", face_material)
 
 
 def result_collection(scene, design_name):
@@ -290,7 +284,8 @@ def write_results(scene, design_name, solid_roles, result, report_json):
 
     solid_roles: native role of each solid index. The partition is always written; cages
     and the composed mesh when the result holds them. The most finished result is shown,
-    the earlier ones are hidden (not deleted).
+    the earlier ones are hidden (not deleted); once a solid is composed, the inputs (the
+    objects with a role) are hidden in the viewport too, until the panel's Show Inputs.
     """
     collection = result_collection(scene, design_name)
     collection[results.DESIGN_PROPERTY] = design_name
@@ -298,7 +293,8 @@ def write_results(scene, design_name, solid_roles, result, report_json):
     try:
         shown = _write_partition(collection, design_name, solid_roles, result)
         cages = _write_cages(collection, design_name, result.get("cages") or [])
-        composed = _write_composed(collection, design_name, result.get("composed"))
+        composed = _write_composed(collection, design_name, result.get("composed"),
+                                   solid_roles)
     except Exception:
         remove_objects(collection)
         raise
@@ -307,8 +303,8 @@ def write_results(scene, design_name, solid_roles, result, report_json):
             _hide(obj)
     if composed is not None:
         for cage in cages:
-            cage.display_type = "WIRE"
             cage.hide_render = True
+        scene.genbrep_settings.show_inputs = False  # hides them (its update)
     return collection
 
 
@@ -327,7 +323,8 @@ def _write_partition(collection, design_name, solid_roles, result):
         set_face_ints(mesh, results.SOURCE_ATTRIBUTE, design["face_source"])
     set_face_colours(mesh, results.PARTITION_COLOR_ATTRIBUTE,
                      results.face_colours(face_solid, face_component, solid_roles))
-    mesh.materials.append(_partition_material())
+    _set_face_materials(mesh, *results.partition_materials(face_solid, face_component,
+                                                           solid_roles))
     written = [_link(collection, results.partition_name(design_name), mesh)]
 
     edges, _ = results.loop_edges(partition.get("loops") or [])
@@ -374,26 +371,49 @@ def _write_cages(collection, design_name, cages):
         shade_smooth(mesh)
         component = int(cage.get("component", index))
         colour = results.component_colour(component)
-        mesh.materials.append(_colour_material(f"genbrep component {component}", colour))
+        mesh.materials.append(_colour_material(results.component_material_name(component),
+                                               colour))
         obj = _link(collection, name, mesh)
-        obj["genbrep_component"] = component
+        obj[results.COMPONENT_PROPERTY] = component
         add_subdivision(obj, cage.get("subdivision"))
         off = np.asarray(cage.get("irregular_off_singularities", ()), dtype=np.int64).ravel()
         if off.size:
             group = obj.vertex_groups.new(name=results.OFF_SINGULARITIES_GROUP)
             group.add(off[off < len(mesh.vertices)].tolist(), 1.0, "REPLACE")
-        obj.show_wire = True
+        _add_control_net(collection, obj, results.control_net_name(design_name, cage, index))
         written.append(obj)
     return written
 
 
+def _add_control_net(collection, cage, name):
+    """The cage's own mesh drawn as wire over its limit surface: a child object sharing the
+    mesh, without the modifier, not selectable (clicks select the cage) and not rendered."""
+    net = _link(collection, name, cage.data)
+    net.parent = cage
+    net.display_type = "WIRE"
+    net.hide_select = True
+    net.hide_render = True
+    return net
+
+
 def cage_objects(collection):
-    """The cage objects of a result collection, in name order."""
-    return sorted((o for o in collection.objects if o.type == "MESH" and " cage " in o.name),
+    """The cage objects of a result collection (not their control nets), in name order."""
+    return sorted((o for o in collection.objects
+                   if o.type == "MESH" and o.get(results.COMPONENT_PROPERTY) is not None),
                   key=lambda o: o.name)
 
 
-def write_recomposed(scene, design_name, cages_in, result, report_json):
+def show_material_colours(screens):
+    """Solid shading of the screens' 3D views colours by material, which shows the
+    partition's and the cages' colours; views shaded otherwise are left as they are."""
+    for screen in screens:
+        for area in screen.areas:
+            for space in area.spaces:
+                if space.type == "VIEW_3D" and space.shading.type == "SOLID":
+                    space.shading.color_type = "MATERIAL"
+
+
+def write_recomposed(scene, design_name, solid_roles, cages_in, result, report_json):
     """After recompose(): the pulled cages replace the edited ones (same objects, modifiers
     kept) and the composed solid is replaced; returns the composed object or None."""
     collection = result_collection_existing(design_name)
@@ -410,19 +430,23 @@ def write_recomposed(scene, design_name, cages_in, result, report_json):
         if mesh.users == 0:
             bpy.data.meshes.remove(mesh)
     collection[results.REPORT_PROPERTY] = report_json
-    return _write_composed(collection, design_name, result.get("composed"))
+    return _write_composed(collection, design_name, result.get("composed"), solid_roles)
 
 
 def result_collection_existing(design_name):
     return bpy.data.collections.get(results.collection_name(design_name))
 
 
-def _write_composed(collection, design_name, composed):
+def _write_composed(collection, design_name, composed, solid_roles):
+    """The composed solid, its faces coloured by where they come from (the materials of the
+    partition and the cages, so a cage drawn over it does not flicker)."""
     if not composed:
         return None
     faces = np.asarray(composed["faces"], dtype=np.int32).reshape(-1, 3)
     mesh = new_mesh(results.composed_name(design_name), composed["vertices"], faces)
     if "face_source" in composed:
         set_face_ints(mesh, results.SOURCE_ATTRIBUTE, composed["face_source"])
-    mesh.materials.append(_colour_material("genbrep composed", (0.75, 0.75, 0.78, 1.0)))
+        _set_face_materials(mesh, *results.source_materials(composed["face_source"], solid_roles))
+    else:
+        mesh.materials.append(_colour_material("genbrep organic", results.ORGANIC_GREY))
     return _link(collection, results.composed_name(design_name), mesh)

@@ -98,6 +98,8 @@ def finish(prepared):
         traceback.print_exc()
         return Outcome("CANCELLED", "ERROR", f"Writing the results of '{name}' failed "
                                               f"({type(exc).__name__}: {exc}): see the console")
+    if not bpy.app.background:  # no one looks at the views of a background Blender
+        bridge.show_material_colours(w.screen for w in bpy.context.window_manager.windows)
     for line in report.report_lines(run_report, prepared.notes):
         print("genbrep:", line)
     summary = report.result_summary(name, result)
@@ -247,7 +249,7 @@ def _redraw_panels(context):
 
 
 class GENBREP_OT_clear_results(bpy.types.Operator):
-    """Delete the result collection of the design"""
+    """Delete the result collection of the design and show the inputs again"""
     bl_idname = "genbrep.clear_results"
     bl_label = "Clear Results"
     bl_options = {"REGISTER", "UNDO"}
@@ -263,6 +265,7 @@ class GENBREP_OT_clear_results(bpy.types.Operator):
         if not bridge.remove_results(name):
             self.report({"INFO"}, f"'{name}' has no results to clear")
             return {"CANCELLED"}
+        context.scene.genbrep_settings.show_inputs = True
         self.report({"INFO"}, f"Deleted collection '{results.collection_name(name)}'")
         return {"FINISHED"}
 
@@ -318,7 +321,8 @@ def recompose_now(context, requested_design=""):
     except module.ConversionError as exc:
         return Outcome("CANCELLED", "ERROR", f"Recomposing '{design_name}' failed: {exc}")
     run_report = result.get("report") or {}
-    composed = bridge.write_recomposed(scene, design_name, cage_objects, result,
+    solid_roles = [checks.NATIVE_ROLE[s["role"]] for s in solids]
+    composed = bridge.write_recomposed(scene, design_name, solid_roles, cage_objects, result,
                                        report.to_json(run_report, []))
     if composed is None:
         return Outcome("FINISHED", "WARNING", f"Recomposed '{design_name}' from "

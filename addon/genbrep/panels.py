@@ -98,6 +98,7 @@ class GENBREP_PT_convert(bpy.types.Panel):
         row = layout.row(align=True)
         row.operator(operators.GENBREP_OT_recompose.bl_idname, icon="FILE_REFRESH")
         row.operator(operators.GENBREP_OT_clear_results.bl_idname, icon="TRASH")
+        layout.prop(context.scene.genbrep_settings, "show_inputs")
         if name is None:
             layout.label(text="Give one object the role Design", icon="INFO")
 

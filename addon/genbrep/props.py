@@ -1,8 +1,9 @@
-"""Blender properties: the role of each object and the conversion settings.
+"""Blender properties: the role of each object, the conversion settings, what is shown.
 
 Object.genbrep.role is saved in the .blend. The settings exist twice with the same names:
 on the scene (Scene.genbrep_settings, edited in the panel) and on the convert operator (its
-redo panel); `SettingsMixin` declares them once for both.
+redo panel); `SettingsMixin` declares them once for both. The scene's group also holds
+show_inputs, the panel's toggle for the objects with a role.
 """
 
 import bpy
@@ -77,8 +78,15 @@ class SettingsMixin:
         description="Last pipeline stage to run")
 
 
+def _show_inputs_changed(settings, _context):
+    show_inputs(settings.id_data, settings.show_inputs)
+
+
 class GENBREP_PG_settings(SettingsMixin, bpy.types.PropertyGroup):
-    pass
+    show_inputs: bpy.props.BoolProperty(
+        name="Show Inputs", default=True, update=_show_inputs_changed,
+        description="Show the design and the solids in the viewport (Convert hides them "
+                    "once it has composed a solid)")
 
 
 def setting_values(owner):
@@ -98,6 +106,19 @@ def role_of(obj):
 def objects_with_role(scene, role):
     """Objects of the scene with the role, sorted by name (the solid order of a run)."""
     return sorted((o for o in scene.objects if role_of(o) == role), key=lambda o: o.name)
+
+
+def show_inputs(scene, shown):
+    """Show or hide the scene's objects with a role, in the viewport only (hide_set, in
+    every view layer of the scene that has them); nothing else about them changes."""
+    for obj in scene.objects:
+        if role_of(obj) == "NONE":
+            continue
+        for view_layer in scene.view_layers:
+            try:
+                obj.hide_set(not shown, view_layer=view_layer)
+            except RuntimeError:  # not in this view layer (its collection is excluded)
+                pass
 
 
 CLASSES = (GENBREP_PG_object, GENBREP_PG_settings)

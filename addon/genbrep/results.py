@@ -16,6 +16,7 @@ SOURCE_ATTRIBUTE = "genbrep_source"                  # int per face: input trian
 OFF_SINGULARITIES_GROUP = "genbrep irregular off singularities"
 REPORT_PROPERTY = "genbrep_report"                   # JSON report on the result collection
 DESIGN_PROPERTY = "genbrep_design"                   # design name on the result collection
+COMPONENT_PROPERTY = "genbrep_component"             # organic component on each cage object
 
 ORGANIC_GREY = (0.8, 0.8, 0.8, 1.0)
 _GOLDEN = 0.618033988749895
@@ -35,6 +36,15 @@ def loops_name(design_name):
 
 def cage_name(design_name, cage, index):
     return f"{design_name} cage {cage.get('name') or index}"
+
+
+def control_net_name(design_name, cage, index):
+    """The wire object drawing a cage's control net (no ' cage ' in it: not a cage)."""
+    return f"{design_name} control net {cage.get('name') or index}"
+
+
+def component_material_name(component):
+    return f"genbrep component {component}"
 
 
 def composed_name(design_name):
@@ -58,20 +68,47 @@ def component_colour(component):
     return _hue_colour(component, 0.1, 0.4, 0.95)
 
 
-def face_colours(face_solid, face_component, solid_roles):
-    """(M, 4) float32 RGBA: incident faces by solid, organic faces by component.
+def partition_materials(face_solid, face_component, solid_roles):
+    """The partition's materials: per face the index of its material (M,) int32, and the
+    materials as (name, RGBA): one per solid, one per organic component (the material its
+    cage uses too), grey for the rest; only materials some face uses, in that order. A
+    name gives its colour, so designs in one file can share the materials.
 
     solid_roles: the native role ('keep_in', ...) of each solid index.
     """
     face_solid = np.asarray(face_solid, dtype=np.int64)
     face_component = np.asarray(face_component, dtype=np.int64)
-    colours = np.tile(np.asarray(ORGANIC_GREY, dtype=np.float32), (len(face_solid), 1))
-    for index, role in enumerate(solid_roles):
-        colours[face_solid == index] = solid_colour(index, role)
     organic = face_solid < 0
-    for component in np.unique(face_component[organic & (face_component >= 0)]):
-        colours[organic & (face_component == component)] = component_colour(int(component))
-    return colours
+    groups = [(f"genbrep {role.replace('_', '-')} {index}", solid_colour(index, role),
+               face_solid == index) for index, role in enumerate(solid_roles)]
+    groups += [(component_material_name(c), component_colour(c), organic & (face_component == c))
+               for c in np.unique(face_component[organic & (face_component >= 0)]).tolist()]
+    face_material = np.full(len(face_solid), -1, dtype=np.int32)
+    materials = []
+    for name, colour, faces in groups:
+        if faces.any():
+            face_material[faces] = len(materials)
+            materials.append((name, colour))
+    if np.any(face_material < 0):
+        face_material[face_material < 0] = len(materials)
+        materials.append(("genbrep organic", ORGANIC_GREY))
+    return face_material, materials
+
+
+def source_materials(face_source, solid_roles):
+    """partition_materials for a mesh whose faces carry their source (solid index ≥ 0, or
+    organic component c as -1 - c, as the composed solid's do): the same colours."""
+    face_source = np.asarray(face_source, dtype=np.int64)
+    return partition_materials(np.where(face_source >= 0, face_source, -1),
+                               np.where(face_source < 0, -1 - face_source, -1), solid_roles)
+
+
+def face_colours(face_solid, face_component, solid_roles):
+    """(M, 4) float32 RGBA: incident faces by solid, organic faces by component, the
+    colours of partition_materials."""
+    face_material, materials = partition_materials(face_solid, face_component, solid_roles)
+    palette = np.array([colour for _, colour in materials] or [ORGANIC_GREY], dtype=np.float32)
+    return palette[face_material]
 
 
 def edge_indices(mesh_edges, pairs):

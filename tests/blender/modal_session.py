@@ -3,7 +3,8 @@
 Run by test_modal.py as
     xvfb-run blender --factory-startup --enable-event-simulate scene.blend -P modal_session.py
 Prints 'MODAL <check> <value>' lines and quits. Timers run the steps, as a user would click:
-convert (modal, worker thread), undo, convert again and press Esc at once.
+convert (modal, worker thread) in a view that colours by object, undo, convert again and
+press Esc at once.
 """
 
 import os
@@ -39,6 +40,7 @@ def step():
     index = _state["step"]
     _state["step"] += 1
     if index == 0:
+        override["area"].spaces.active.shading.color_type = "OBJECT"
         bpy.ops.ed.undo_push(message="before convert")
         with bpy.context.temp_override(**override):
             _say("invoke", sorted(bpy.ops.genbrep.convert("INVOKE_DEFAULT")))
@@ -50,6 +52,7 @@ def step():
             _state["waited"] += POLL
             return POLL
         _say("converted", COLLECTION in bpy.data.collections)
+        _say("colour_type", override["area"].spaces.active.shading.color_type)
         with bpy.context.temp_override(**override):
             bpy.ops.ed.undo()
         _say("after_undo", COLLECTION in bpy.data.collections)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import needs_native, scene_state
-from genbrep import job, native, operators, results
+from genbrep import bridge, job, native, operators, results
 
 pytestmark = needs_native
 
@@ -32,7 +32,9 @@ def test_convert_writes_partition_collection(open_fixture):
     assert collection.name in bpy.context.scene.collection.children
     report = json.loads(collection[results.REPORT_PROPERTY])
     cage_names = sorted(o.name for o in collection.objects if " cage " in o.name)
-    names = sorted(o.name for o in collection.objects if " cage " not in o.name)
+    net_names = sorted(o.name for o in collection.objects if " control net " in o.name)
+    names = sorted(o.name for o in collection.objects
+                   if " cage " not in o.name and " control net " not in o.name)
     assert names == ["design boundary loops", "design composed", "design cross field",
                      "design partition", "design singularities"]
     assert report["composed"]["ok"]
@@ -42,7 +44,8 @@ def test_convert_writes_partition_collection(open_fixture):
     assert report["notes"][0].startswith("grid incidence with the voxel size recorded")
     assert any(note.startswith("quad: component ") for note in report["notes"])
     # One cage object per cage the pipeline made, shown through its Subdivision Surface.
-    assert len(cage_names) == len(report["cages"])
+    assert len(cage_names) == len(report["cages"]) == len(net_names)
+    assert [o.name for o in bridge.cage_objects(collection)] == cage_names
     for name in cage_names:
         cage = collection.objects[name]
         assert all(len(p.vertices) == 4 for p in cage.data.polygons)
@@ -57,7 +60,9 @@ def test_convert_writes_partition_collection(open_fixture):
     assert set(np.unique(component[solid == -1])) == {0, 1, 2, 3}  # one per tube
     assert np.all(component[solid >= 0] == -1)
     assert mesh.color_attributes[results.PARTITION_COLOR_ATTRIBUTE].domain == "CORNER"
-    assert mesh.materials[0].name == "genbrep partition"
+    assert sorted(m.name for m in mesh.materials) == [
+        *(f"genbrep component {c}" for c in range(4)),
+        *(f"genbrep keep-in {s}" for s in range(4))]  # the four blocks
     assert report["counts"]["organic_components"] == 4
 
     # The cross field: a two-edge cross per organic face, hidden until the user shows it;
@@ -70,6 +75,35 @@ def test_convert_writes_partition_collection(open_fixture):
     points.attributes["genbrep_index"].data.foreach_get("value", index)
     assert index.sum() == 0 and set(np.unique(index)) <= {-1, 1}
     assert [c["index_sum_quarter_turns"] for c in report["field"]["components"]] == [0, 0, 0, 0]
+
+
+def test_convert_shows_the_composed_solid_and_cages_and_hides_the_inputs(open_fixture):
+    open_fixture("seed")
+    scene = bpy.context.scene
+    inputs = [o for o in scene.objects if o.genbrep.role != "NONE"]
+    assert len(inputs) == 3 and not any(o.hide_get() for o in inputs)
+    assert _convert() == {"FINISHED"}
+    collection = bpy.data.collections[COLLECTION]
+    composed = collection.objects["design composed"]
+    cages = bridge.cage_objects(collection)
+    assert cages and not composed.hide_get()
+    nets = [o for o in collection.objects if o.parent in cages]
+    assert len(nets) == len(cages)
+    for cage in cages:
+        assert not cage.hide_get() and cage.display_type != "WIRE"
+        net = next(o for o in nets if o.parent == cage)
+        assert net.data == cage.data and net.display_type == "WIRE" and not net.hide_get()
+    assert collection.objects["design partition"].hide_get()
+    # The inputs are hidden in the viewport, unchanged otherwise; the toggle shows them.
+    assert all(o.hide_get() and not o.hide_render for o in inputs)
+    scene.genbrep_settings.show_inputs = True
+    assert not any(o.hide_get() for o in inputs)
+    scene.genbrep_settings.show_inputs = False
+    assert all(o.hide_get() for o in inputs)
+    default = bpy.data.materials.new("default").diffuse_color
+    for obj in [composed, *cages, collection.objects["design partition"]]:
+        for material in obj.data.materials:
+            assert not np.allclose(material.diffuse_color, default), material.name
 
 
 def test_rerun_replaces_results(open_fixture):

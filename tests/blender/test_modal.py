@@ -24,6 +24,8 @@ def test_modal_convert_undo_and_esc():
     run = subprocess.run(command, capture_output=True, text=True, timeout=180)
     checks = dict(line.split(" ", 2)[1:] for line in run.stdout.splitlines()
                   if line.startswith("MODAL "))
-    assert checks == {"invoke": "['RUNNING_MODAL']", "converted": "True", "after_undo": "False",
+    # colour_type: Convert makes the Solid view show the partition and cage colours.
+    assert checks == {"invoke": "['RUNNING_MODAL']", "converted": "True",
+                      "colour_type": "MATERIAL", "after_undo": "False",
                       "invoke_again": "['RUNNING_MODAL']", "after_esc": "False",
                       "running_jobs": "0"}, run.stdout + run.stderr

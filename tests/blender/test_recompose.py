@@ -46,6 +46,8 @@ def test_recompose_follows_an_edited_cage(open_fixture, recompose_module):
             v.co += v.normal * 0.02 * size
     mesh.update()
     assert bpy.ops.genbrep.recompose() == {"FINISHED"}
+    # The pulled cage has a new mesh, and its control net draws that one.
+    assert [o for o in collection.objects if o.parent == cage][0].data == cage.data
     after = _composed_volume(collection)
     assert after > before  # material added where the cage was pushed out
     report = json.loads(collection[results.REPORT_PROPERTY])

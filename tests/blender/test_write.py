@@ -5,6 +5,7 @@ import bpy
 import numpy as np
 import pytest
 
+from conftest import mesh_object
 from genbrep import bridge, report, results
 
 
@@ -52,7 +53,7 @@ def test_cages_and_composed_are_written(empty_scene):
                                       report.to_json({}))
     objects = {o.name: o for o in collection.objects}
     assert set(objects) == {"part partition", "part boundary loops", "part cage arm",
-                            "part composed"}
+                            "part control net arm", "part composed"}
     cage = objects["part cage arm"]
     assert len(cage.data.polygons) == 6 and all(p.loop_total == 4 for p in cage.data.polygons)
     modifier = cage.modifiers["genbrep Subdivision"]
@@ -65,12 +66,31 @@ def test_cages_and_composed_are_written(empty_scene):
     assert cage["genbrep_component"] == 0
     assert objects["part partition"].hide_render and not objects["part composed"].hide_render
     assert len(objects["part boundary loops"].data.edges) == 3
+    assert bridge.cage_objects(collection) == [cage]
+
+
+def test_cage_shows_its_limit_surface_under_its_control_net(empty_scene):
+    collection = bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], _result(),
+                                      "{}")
+    cage = collection.objects["part cage arm"]
+    net = collection.objects["part control net arm"]
+    assert cage.display_type == "TEXTURED" and not cage.hide_get()  # shaded limit surface
+    assert net.data == cage.data and not net.modifiers  # the control net itself
+    assert net.display_type == "WIRE" and net.parent == cage
+    assert net.hide_select and net.hide_render and not net.hide_get()
+    assert "genbrep_component" not in net
+    assert not collection.objects["part composed"].hide_get()
+    # A recompose gives the cage a new mesh: the net draws the new one, the old is freed.
+    old = cage.data.name
+    vertices, quads = _cube_cage()
+    bridge.replace_mesh_data(cage, vertices * 1.1, quads)
+    assert net.data == cage.data and old not in bpy.data.meshes
 
 
 def test_rewrite_replaces_objects(empty_scene):
     for _ in range(2):
         bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], _result(), "{}")
-    assert len(bpy.data.collections["genbrep part"].objects) == 4
+    assert len(bpy.data.collections["genbrep part"].objects) == 5  # the net shares a mesh
     assert len(bpy.data.meshes) == 4
     assert bridge.remove_results("part")
     assert "genbrep part" not in bpy.data.collections and len(bpy.data.meshes) == 0
@@ -88,6 +108,69 @@ def test_partition_only_result_is_written(empty_scene):
     per_face = colours.reshape(-1, 3, 4)[:, 0]
     assert not np.allclose(per_face[0], per_face[3])  # two different solids
     np.testing.assert_allclose(per_face[1], per_face[2])  # the same organic component
+
+
+def _face_materials(obj):
+    index = np.empty(len(obj.data.polygons), np.int32)
+    obj.data.polygons.foreach_get("material_index", index)
+    return [obj.data.materials[i] for i in index]
+
+
+def test_partition_and_cage_colours_are_material_colours(empty_scene):
+    collection = bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], _result(),
+                                      "{}")
+    partition = collection.objects["part partition"].data
+    colours = np.empty(len(partition.loops) * 4, np.float32)
+    partition.color_attributes[results.PARTITION_COLOR_ATTRIBUTE].data.foreach_get(
+        "color", colours)
+    # Each face's material has the face's partition colour as its viewport colour.
+    materials = _face_materials(collection.objects["part partition"])
+    assert [m.name for m in materials] == ["genbrep keep-in 0", "genbrep component 0",
+                                           "genbrep component 0", "genbrep keep-out 1"]
+    for material, colour in zip(materials, colours.reshape(-1, 3, 4)[:, 0]):
+        np.testing.assert_allclose(material.diffuse_color, colour, rtol=1e-6)
+    default = bpy.data.materials.new("default").diffuse_color
+    assert not any(np.allclose(m.diffuse_color, default) for m in materials)
+    # The cage of component 0 uses the material of its region in the partition; the
+    # composed solid's faces that of their source (solids 0, 1, then unknown solids 2, 3).
+    assert collection.objects["part cage arm"].data.materials[0] == materials[1]
+    composed = _face_materials(collection.objects["part composed"])
+    assert composed[:2] == [materials[0], materials[3]]
+    assert [m.name for m in composed[2:]] == ["genbrep organic"] * 2
+
+
+def test_composed_result_hides_the_inputs_until_shown(empty_scene):
+    triangle = ([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 2)])
+    inputs = [mesh_object(name, *triangle, role) for name, role in
+              (("part", "DESIGN"), ("lug", "KEEP_IN"), ("hole", "KEEP_OUT"))]
+    bystander = mesh_object("lamp", *triangle, "NONE")
+    result = _result()
+    result.update(composed=None)
+    bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], result, "{}")
+    assert not any(o.hide_get() for o in inputs)  # nothing composed: as they were
+    bridge.write_results(empty_scene, "part", ["keep_in", "keep_out"], _result(), "{}")
+    settings = empty_scene.genbrep_settings
+    assert not settings.show_inputs
+    assert all(o.hide_get() for o in inputs) and not bystander.hide_get()
+    assert not any(o.hide_render or o.hide_viewport for o in inputs)  # the viewport only
+    settings.show_inputs = True
+    assert not any(o.hide_get() for o in inputs)
+    settings.show_inputs = False
+    assert all(o.hide_get() for o in inputs) and not bystander.hide_get()
+    assert set(empty_scene.objects) >= {*inputs, bystander}  # none deleted
+    assert bpy.ops.genbrep.clear_results(design="part") == {"FINISHED"}
+    assert settings.show_inputs and not any(o.hide_get() for o in inputs)
+
+
+def test_solid_views_colour_by_material(empty_scene):
+    views = [s for screen in bpy.data.screens for a in screen.areas for s in a.spaces
+             if s.type == "VIEW_3D"]
+    assert len(views) >= 2
+    views[0].shading.type, views[0].shading.color_type = "SOLID", "OBJECT"
+    views[1].shading.type, views[1].shading.color_type = "WIREFRAME", "OBJECT"
+    bridge.show_material_colours(bpy.data.screens)
+    assert views[0].shading.color_type == "MATERIAL"
+    assert (views[1].shading.type, views[1].shading.color_type) == ("WIREFRAME", "OBJECT")
 
 
 def _members(obj, name):
