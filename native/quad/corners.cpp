@@ -31,7 +31,7 @@
 #include <memory>
 #include <vector>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/patches.h"
 
 namespace genbrep::quad_detail {
 namespace {
@@ -140,7 +140,6 @@ std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int pa
 }
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 // How far a patch whose nodes read `quarters` is from a rectangle: Σ over its two pairs of
 // opposite sides of 2 |difference| / sum of their targets (`after`: the target of the arc

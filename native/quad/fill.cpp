@@ -12,7 +12,7 @@
 #include <functional>
 #include <map>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/patches.h"
 
 namespace genbrep::quad_detail {
 

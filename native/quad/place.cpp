@@ -45,7 +45,7 @@
 #include <tuple>
 #include <vector>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/edit.h"
 
 namespace genbrep::quad_detail {
 

@@ -31,7 +31,7 @@
 #include <memory>
 #include <string>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/patches.h"
 
 namespace genbrep::quad_detail {
 

@@ -29,7 +29,7 @@
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "quad/detail/layout.h"
+#include "quad/detail/surface.h"
 
 namespace genbrep::quad_detail {
 
