@@ -34,7 +34,6 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 // A pair of triangles is merged only if its quad's corners are all within this of 90°.
 constexpr double kMaxPairDeviation = 50.0;
 
-Vec3 to_vec(const Point& p) { return Vec3(p.x(), p.y(), p.z()); }
 
 double max_corner_deviation(const Vec3 (&c)[4]) {
   double worst = 0;

@@ -6,10 +6,6 @@
 #include "quad/detail/surface.h"
 
 namespace genbrep::quad_detail {
-namespace {
-Vec3 to_vec(const OpenMesh::Vec3d& p) { return Vec3(p[0], p[1], p[2]); }
-}  // namespace
-
 Surface::Surface(const TriMesh& m, const Partition& p, const CrossField& f, int c)
     : mesh(m), partition(p), field(f), component(c) {
   const int nv = static_cast<int>(m.n_vertices()), nf = static_cast<int>(m.n_faces());
