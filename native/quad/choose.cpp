@@ -182,26 +182,15 @@ bool better_second_reading(const QuadStats& second, const QuadStats& first) {
 }
 namespace {
 
-// One component. The layout depends on a few discrete choices (how corners are read,
-// whether separatrices join nearly parallel curves, which singularity pairs cancel, which
-// singularities the boundary absorbs, whether separatrices cross, whether unbalanced
-// patches are merged, what a curve arriving at a singularity records). They are tried in
-// turn, each from scratch (a layout equal to an earlier one is not filled again), until a
-// cage meets the targets with a margin and has no irregular vertex away from the field's
-// singularities (comfortably_meets_targets), or until the work budget after the first cage
-// that meets them is spent (QuadOptions::work_after_meeting, min_choices_after_meeting). Kept:
-// among the cages meeting the targets, preferably one that needed no quad collapsed (a collapse
-// leaves a valence-6 vertex whose pulled limit surface can fold), then the density nearest the
-// size field's, then the fewest squeezed arcs, then the fewest irregular
-// vertices away from the field's singularities (counts within 15% or 2 even, unless one is none),
-// then the fewest skewed quads (within 20% or 5 even), then the fewest quads over 2.5x the
-// target edge (the same), then the fewest irregular vertices (counts within 5% of each other
-// are even), then the smallest mean corner deviation (better_cage); if none
-// meets them, the valid cage with the smallest mean corner deviation. The choice that was used is
-// reported when it is not the requested one.
-void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
-                       const QuadOptions& options, int c, QuadResult* out) {
-  struct Variant { std::string what; QuadOptions options; };
+// A layout choice: how it differs from the requested layout (empty for that one), and the
+// options it runs with.
+struct Variant {
+  std::string what;
+  QuadOptions options;
+};
+
+// The layout choices of a component in the order they are tried.
+std::vector<Variant> layout_choices(const QuadOptions& options) {
   std::vector<Variant> variants;
   const std::pair<const char*, std::function<void(QuadOptions&)>> layouts[] = {
       {"", [](QuadOptions&) {}},
@@ -267,45 +256,63 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
                                      : "arrivals recording the field's direction",
                      o});
   }
-  const quad_detail::Surface coarse(design, partition, field, c);
-  // Raise the density where singularities are dense (QuadOptions::vertices_per_singular_quarter).
-  const double raise = density_raise(coarse, options);
-  if (raise > 1) {
-    char text[160];
-    std::snprintf(text, sizeof text,
-                  "component %d: density raised %.2gx so that its singularities are at most "
-                  "1 in %.0f cage vertices",
-                  c, raise, options.vertices_per_singular_quarter);
-    out->notes.push_back(text);
-    for (auto& variant : variants) variant.options.density *= raise;
+  return variants;
+}
+
+// One layout choice's attempt as the search takes it.
+struct Attempt : Reading {
+  std::exception_ptr error;
+  // A cage that meets the targets but for its corner angles is squared before it is
+  // judged (the targets are the output cage's, and squaring makes it): the copy, if it
+  // came closer to 90°. Choices are still compared on the angles before squaring.
+  std::optional<Squared> squared;
+  bool squaring_tried = false;
+  bool dropped = false;  // it ended in an error after it was told to stop
+  bool needs_squaring() const {
+    QuadStats square = stats;
+    square.mean_angle_deviation_deg = 0;
+    return !error && !meets_targets(stats) && meets_targets(square);
   }
-  const double asked = size_field_quads(coarse, variants[0].options.density);
-  const auto preparing = std::chrono::steady_clock::now();
-  const int levels = refine_levels(coarse, variants[0].options);
-  const quad_detail::RefinedDesign refined =
-      quad_detail::refine_component(design, partition, field, c, levels);
-  const bool finer = refined.mesh.n_faces() > 0;  // else: nothing needed splitting
+  QuadStats judged() const {  // what the targets are checked on
+    QuadStats judged = stats;
+    if (squared) judged.mean_angle_deviation_deg = squared->mean_deg;
+    return judged;
+  }
+};
+
+// The search among a component's layout choices (extract_component): the component
+// refined for tracing, the attempts run in batches on threads and taken in order, the best
+// cage kept and reported, or the fallback cage.
+class ComponentSearch {
+ public:
+  ComponentSearch(const TriMesh& design, const Partition& partition, const CrossField& field,
+                  const QuadOptions& options, int c, QuadResult* out);
+  void run();
+
+ private:
+  bool out_of_work(size_t tried);
+  void keep(size_t k, Attempt& a, bool meets);
+  bool wants_second_reading(size_t k, const Attempt& a);
+  void read_again(size_t k, Attempt* a, const quad_detail::Dropped& dropped);
+  void attempt(size_t k, const std::set<std::size_t>& seen, Attempt* a, const quad_detail::Dropped& dropped, bool first_only = false);
+  void search();
+  void try_without_kinks();
+  void report_kept();
+  void fall_back();
+
+  const QuadOptions& options;
+  const int c;
+  QuadResult* out;
+  std::vector<Variant> variants;
+  const quad_detail::Surface coarse;
+  double asked = 0;
+  int levels = 0;
+  quad_detail::RefinedDesign refined;
   std::optional<quad_detail::Surface> refined_surface;
-  if (finer) refined_surface.emplace(refined.mesh, refined.partition, refined.field, c);
-  const quad_detail::Surface& surface = refined_surface ? *refined_surface : coarse;
-  // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
-  const quad_detail::CageChecks checks(coarse);
+  const quad_detail::Surface* surface_ = nullptr;  // the refined surface, or coarse
+  std::optional<quad_detail::CageChecks> checks_;
   int triangles = 0;  // of the (refined) component
-  for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
-  if (finer) {
-    char text[200];
-    std::snprintf(text, sizeof text,
-                  "component %d: refined round its singularities%s for tracing (%d triangles) "
-                  "in %.1f s",
-                  c, levels > 0 ? (" and " + std::to_string(1 << (2 * levels)) + "x").c_str() : "",
-                  triangles,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
-    out->notes.push_back(text);
-  }
-  // The component's field singularities (QuadStats).
-  std::vector<quad_detail::SingularPoint> singular;
-  for (const auto& point : field.singularities)
-    if (point.component == c) singular.push_back({coarse.point[point.vertex], point.index});
+  std::vector<quad_detail::SingularPoint> singular;  // the component's field singularities
   std::set<std::size_t> seen_layouts;
   std::string first_failure, requested_failure;
   int best = -1;
@@ -321,94 +328,143 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   // at least min_choices_after_meeting, counting only choices that traced a new layout (a
   // repeated one stops after tracing).
   int first_meeting = -1, tried_after_meeting = 0;
-  const int choices_after_meeting =
-      std::max(options.min_choices_after_meeting,
-               static_cast<int>(options.work_after_meeting / std::max(1, triangles)));
-  // The work the attempts spent, summed in choice order (QuadOptions::work_per_component).
+  int choices_after_meeting = 0;
   double work_spent = 0;
-  auto out_of_work = [&](size_t tried) {
-    if (tried == 0 || work_spent < options.work_per_component) return false;
+  int threads = 1;
+  std::optional<ComponentInputs> inputs;
+  bool pair_readings = false;
+};
+
+ComponentSearch::ComponentSearch(const TriMesh& design, const Partition& partition,
+                                 const CrossField& field, const QuadOptions& options, int c,
+                                 QuadResult* out)
+    : options(options), c(c), out(out), variants(layout_choices(options)),
+      coarse(design, partition, field, c) {
+  // Raise the density where singularities are dense (QuadOptions::vertices_per_singular_quarter).
+  const double raise = density_raise(coarse, options);
+  if (raise > 1) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "component %d: density raised %.2gx so that its singularities are at most "
+                  "1 in %.0f cage vertices",
+                  c, raise, options.vertices_per_singular_quarter);
+    out->notes.push_back(text);
+    for (auto& variant : variants) variant.options.density *= raise;
+  }
+  asked = size_field_quads(coarse, variants[0].options.density);
+  const auto preparing = std::chrono::steady_clock::now();
+  levels = refine_levels(coarse, variants[0].options);
+  refined = quad_detail::refine_component(design, partition, field, c, levels);
+  const bool finer = refined.mesh.n_faces() > 0;  // else: nothing needed splitting
+  if (finer) refined_surface.emplace(refined.mesh, refined.partition, refined.field, c);
+  surface_ = refined_surface ? &*refined_surface : &coarse;
+  const quad_detail::Surface& surface = *surface_;
+  // Checks run on the unrefined component: the same surface, a sixteenth of the triangles.
+  checks_.emplace(coarse);
+  for (auto f : surface.mesh.faces()) triangles += surface.in(f.idx());
+  if (finer) {
     char text[200];
     std::snprintf(text, sizeof text,
-                  "component %d: stopped trying layout choices after %.3g units of work "
-                  "(work_per_component), %zu of %zu tried",
-                  c, work_spent, tried, variants.size());
-    out->diagnostics.push_back(text);
-    return true;
-  };
+                  "component %d: refined round its singularities%s for tracing (%d triangles) "
+                  "in %.1f s",
+                  c, levels > 0 ? (" and " + std::to_string(1 << (2 * levels)) + "x").c_str() : "",
+                  triangles,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - preparing).count());
+    out->notes.push_back(text);
+  }
+  // The component's field singularities (QuadStats).
+  for (const auto& point : field.singularities)
+    if (point.component == c) singular.push_back({coarse.point[point.vertex], point.index});
+  // Once a cage meets the targets, more choices are tried only within a work budget:
+  // choices × the (refined) component's triangles (QuadOptions::work_after_meeting), but
+  // at least min_choices_after_meeting, counting only choices that traced a new layout (a
+  // repeated one stops after tracing).
+  choices_after_meeting =
+      std::max(options.min_choices_after_meeting,
+               static_cast<int>(options.work_after_meeting / std::max(1, triangles)));
   // Choices run in batches of `threads` at once (each attempt reads only shared constant
   // data); their results are taken in order, exactly as if they had run one after another:
   // a layout an earlier choice of the same batch already had counts as repeated, and a
   // batch's later results are dropped once the search would have stopped.
-  const int threads = std::max(
+  threads = std::max(
       1, options.parallel_choices > 0
              ? options.parallel_choices
              : std::min(4, static_cast<int>(std::thread::hardware_concurrency())));
-  const ComponentInputs inputs{surface, checks, singular, asked, options.density};
-  struct Attempt : Reading {
-    std::exception_ptr error;
-    // A cage that meets the targets but for its corner angles is squared before it is
-    // judged (the targets are the output cage's, and squaring makes it): the copy, if it
-    // came closer to 90°. Choices are still compared on the angles before squaring.
-    std::optional<Squared> squared;
-    bool squaring_tried = false;
-    bool dropped = false;  // it ended in an error after it was told to stop
-    bool needs_squaring() const {
-      QuadStats square = stats;
-      square.mean_angle_deviation_deg = 0;
-      return !error && !meets_targets(stats) && meets_targets(square);
-    }
-    QuadStats judged() const {  // what the targets are checked on
-      QuadStats judged = stats;
-      if (squared) judged.mean_angle_deviation_deg = squared->mean_deg;
-      return judged;
-    }
-  };
-  // Choice k's attempt becomes the cage kept so far.
-  auto keep = [&](size_t k, Attempt& a, bool meets) {
-    best = static_cast<int>(k);
-    best_cage = std::move(a.cage);
-    best_stats = a.stats;
-    best_meets = meets;
-    best_squared = std::move(a.squared);
-    best_squaring_tried = a.squaring_tried;
-    best_messages = std::move(a.messages);
-  };
-  // Choice k's second reading (read_off_nodes_again), where its first left irregular
-  // vertices away from singularities: off_node_share of them, or off_node_count.
-  auto wants_second_reading = [&](size_t k, const Attempt& a) {
-    const QuadOptions& o = variants[k].options;
-    const int off = a.stats.irregular_off_singularities;
-    return !a.error && o.off_node_price > 0 && off > 0 &&
-           (off >= o.off_node_share * a.stats.irregular_vertices ||
-            (o.off_node_count > 0 && off >= o.off_node_count));
-  };
-  auto read_again = [&](size_t k, Attempt* a, const quad_detail::Dropped& dropped) {
-    if (!wants_second_reading(k, *a)) return;
-    try {
-      read_off_nodes_again(inputs, variants[k].options, dropped, a);
-    } catch (...) {
-      a->error = std::current_exception();
-      a->dropped = dropped.stopped();
-    }
-  };
-  // Choice k's attempt: its first reading, and its second unless `first_only`.
-  auto attempt = [&](size_t k, const std::set<std::size_t>& seen, Attempt* a,
-                     const quad_detail::Dropped& dropped, bool first_only = false) {
-    try {
-      extract_once(inputs, variants[k].options, seen, dropped, {}, a);
-    } catch (...) {
-      a->error = std::current_exception();
-      a->dropped = dropped.stopped();
-      return;
-    }
-    if (!first_only) read_again(k, a, dropped);
-  };
+  inputs.emplace(ComponentInputs{surface, *checks_, singular, asked, options.density});
   // QuadOptions::pair_second_readings: the first batch holds the requested layout and its
   // sibling, however many threads there are (not where the work allows the requested one
   // only: work_per_component 0).
-  const bool pair_readings =
+  pair_readings =
       options.pair_second_readings && options.work_per_component > 0 && variants.size() >= 2;
+}
+
+void ComponentSearch::run() {
+  search();
+  try_without_kinks();
+  if (best >= 0)
+    report_kept();
+  else
+    fall_back();
+}
+
+// The work the attempts spent, summed in choice order (QuadOptions::work_per_component).
+bool ComponentSearch::out_of_work(size_t tried) {
+  if (tried == 0 || work_spent < options.work_per_component) return false;
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "component %d: stopped trying layout choices after %.3g units of work "
+                "(work_per_component), %zu of %zu tried",
+                c, work_spent, tried, variants.size());
+  out->diagnostics.push_back(text);
+  return true;
+}
+
+// Choice k's attempt becomes the cage kept so far.
+void ComponentSearch::keep(size_t k, Attempt& a, bool meets) {
+  best = static_cast<int>(k);
+  best_cage = std::move(a.cage);
+  best_stats = a.stats;
+  best_meets = meets;
+  best_squared = std::move(a.squared);
+  best_squaring_tried = a.squaring_tried;
+  best_messages = std::move(a.messages);
+}
+
+// Choice k's second reading (read_off_nodes_again), where its first left irregular
+// vertices away from singularities: off_node_share of them, or off_node_count.
+bool ComponentSearch::wants_second_reading(size_t k, const Attempt& a) {
+  const QuadOptions& o = variants[k].options;
+  const int off = a.stats.irregular_off_singularities;
+  return !a.error && o.off_node_price > 0 && off > 0 &&
+         (off >= o.off_node_share * a.stats.irregular_vertices ||
+          (o.off_node_count > 0 && off >= o.off_node_count));
+}
+
+void ComponentSearch::read_again(size_t k, Attempt* a, const quad_detail::Dropped& dropped) {
+  if (!wants_second_reading(k, *a)) return;
+  try {
+    read_off_nodes_again(*inputs, variants[k].options, dropped, a);
+  } catch (...) {
+    a->error = std::current_exception();
+    a->dropped = dropped.stopped();
+  }
+}
+
+// Choice k's attempt: its first reading, and its second unless `first_only`.
+void ComponentSearch::attempt(size_t k, const std::set<std::size_t>& seen, Attempt* a, const quad_detail::Dropped& dropped, bool first_only) {
+  try {
+    extract_once(*inputs, variants[k].options, seen, dropped, {}, a);
+  } catch (...) {
+    a->error = std::current_exception();
+    a->dropped = dropped.stopped();
+    return;
+  }
+  if (!first_only) read_again(k, a, dropped);
+}
+
+// The layout choices in batches, until the search stops.
+void ComponentSearch::search() {
+  const quad_detail::CageChecks& checks = *checks_;
   bool stop = false;
   for (size_t k = 0; k < variants.size() && !stop;) {
     if (out_of_work(k)) break;
@@ -545,6 +601,9 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
       if (first_meeting < 0 && meets) first_meeting = static_cast<int>(k);
     }
   }
+}
+
+void ComponentSearch::try_without_kinks() {
   // Last field-aligned resort before the fallback cage: the requested layout without kink
   // nodes (QuadOptions::kink_nodes). Their corners can leave a layout that no integer counts
   // balance (lattice's requested layout at h 0.125: 266 patches, 14 merged, none balance),
@@ -562,60 +621,67 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
     else
       keep(variants.size() - 1, a, meets_targets(a.judged()));
   }
-  if (best >= 0) {
-    add_messages(best_messages, out);
-    if (best > 0) {
-      std::string why = "the requested one failed: " + requested_failure;
-      if (requested_stats && !meets_targets(*requested_stats)) {
-        char text[240];
-        std::snprintf(text, sizeof text,
-                      "the requested one missed the targets: %.1f%% interior valence 4, %.1f%% "
-                      "boundary valence 3, %.1f° mean corner deviation",
-                      100 * requested_stats->interior_valence4_fraction(),
-                      100 * requested_stats->boundary_valence3_fraction(),
-                      requested_stats->mean_angle_deviation_deg);
-        why = text;
-      } else if (requested_stats) {
-        char text[240];
-        std::snprintf(text, sizeof text,
-                      "%d irregular vertices (%d away from singularities), %.1f° mean corner "
-                      "deviation, %d collapsed quads; the requested one: %d (%d), %.1f°, %d",
-                      best_stats.irregular_vertices, best_stats.irregular_off_singularities,
-                      best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads,
-                      requested_stats->irregular_vertices,
-                      requested_stats->irregular_off_singularities,
-                      requested_stats->mean_angle_deviation_deg, requested_stats->collapsed_quads);
-        why = text;
-      }
-      out->notes.push_back("component " + std::to_string(c) +
-                           ": the cage uses the layout with " + variants[best].what + " (" + why +
-                           ")");
-    }
-    if (best_squared)
-      keep_squared(std::move(*best_squared), c, &best_cage, &best_stats, &out->notes);
-    else if (!best_squaring_tried)
-      square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
-                  &out->notes);
-    // Counted again on the squared cage: squaring moves the vertices round an irregular
-    // one, and with them its mean edge, so its reach (48 conversions: one more, the 3 x 3
-    // net at h 0.115, a 5 whose reach fell under its singularity's distance).
-    count_off_singularities(checks, best_cage, singular, variants[best].options.density,
-                            &best_stats);
-    if (!meets_targets(best_stats)) {
+}
+
+// The kept cage squared, counted and reported.
+void ComponentSearch::report_kept() {
+  const quad_detail::CageChecks& checks = *checks_;
+  add_messages(best_messages, out);
+  if (best > 0) {
+    std::string why = "the requested one failed: " + requested_failure;
+    if (requested_stats && !meets_targets(*requested_stats)) {
       char text[240];
       std::snprintf(text, sizeof text,
-                    "component %d: no layout choice met the targets; the cage is the best "
-                    "field-aligned one (%.1f%% interior valence 4, %.1f%% boundary valence 3, "
-                    "%.1f° mean corner deviation, %d quads collapsed along a diagonal)",
-                    c, 100 * best_stats.interior_valence4_fraction(),
-                    100 * best_stats.boundary_valence3_fraction(),
-                    best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads);
-      out->diagnostics.push_back(text);
+                    "the requested one missed the targets: %.1f%% interior valence 4, %.1f%% "
+                    "boundary valence 3, %.1f° mean corner deviation",
+                    100 * requested_stats->interior_valence4_fraction(),
+                    100 * requested_stats->boundary_valence3_fraction(),
+                    requested_stats->mean_angle_deviation_deg);
+      why = text;
+    } else if (requested_stats) {
+      char text[240];
+      std::snprintf(text, sizeof text,
+                    "%d irregular vertices (%d away from singularities), %.1f° mean corner "
+                    "deviation, %d collapsed quads; the requested one: %d (%d), %.1f°, %d",
+                    best_stats.irregular_vertices, best_stats.irregular_off_singularities,
+                    best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads,
+                    requested_stats->irregular_vertices,
+                    requested_stats->irregular_off_singularities,
+                    requested_stats->mean_angle_deviation_deg, requested_stats->collapsed_quads);
+      why = text;
     }
-    out->cages.push_back(std::move(best_cage));
-    out->stats.push_back(best_stats);
-    return;
+    out->notes.push_back("component " + std::to_string(c) +
+                         ": the cage uses the layout with " + variants[best].what + " (" + why +
+                         ")");
   }
+  if (best_squared)
+    keep_squared(std::move(*best_squared), c, &best_cage, &best_stats, &out->notes);
+  else if (!best_squaring_tried)
+    square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
+                &out->notes);
+  // Counted again on the squared cage: squaring moves the vertices round an irregular
+  // one, and with them its mean edge, so its reach (48 conversions: one more, the 3 x 3
+  // net at h 0.115, a 5 whose reach fell under its singularity's distance).
+  count_off_singularities(checks, best_cage, singular, variants[best].options.density,
+                          &best_stats);
+  if (!meets_targets(best_stats)) {
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  "component %d: no layout choice met the targets; the cage is the best "
+                  "field-aligned one (%.1f%% interior valence 4, %.1f%% boundary valence 3, "
+                  "%.1f° mean corner deviation, %d quads collapsed along a diagonal)",
+                  c, 100 * best_stats.interior_valence4_fraction(),
+                  100 * best_stats.boundary_valence3_fraction(),
+                  best_stats.mean_angle_deviation_deg, best_stats.collapsed_quads);
+    out->diagnostics.push_back(text);
+  }
+  out->cages.push_back(std::move(best_cage));
+  out->stats.push_back(best_stats);
+}
+
+void ComponentSearch::fall_back() {
+  const quad_detail::CageChecks& checks = *checks_;
+  const quad_detail::Surface& surface = *surface_;
   // Last resort: the split coarse remesh, valid by construction but not field-aligned.
   // A coarse remesh of a thin part can fold; then it is made finer.
   double size = 0;
@@ -654,6 +720,28 @@ void extract_component(const TriMesh& design, const Partition& partition, const 
   out->cages.push_back(std::move(cage));
   stats.size_field_quads = asked;
   out->stats.push_back(stats);
+}
+
+// One component. The layout depends on a few discrete choices (how corners are read,
+// whether separatrices join nearly parallel curves, which singularity pairs cancel, which
+// singularities the boundary absorbs, whether separatrices cross, whether unbalanced
+// patches are merged, what a curve arriving at a singularity records). They are tried in
+// turn, each from scratch (a layout equal to an earlier one is not filled again), until a
+// cage meets the targets with a margin and has no irregular vertex away from the field's
+// singularities (comfortably_meets_targets), or until the work budget after the first cage
+// that meets them is spent (QuadOptions::work_after_meeting, min_choices_after_meeting). Kept:
+// among the cages meeting the targets, preferably one that needed no quad collapsed (a collapse
+// leaves a valence-6 vertex whose pulled limit surface can fold), then the density nearest the
+// size field's, then the fewest squeezed arcs, then the fewest irregular
+// vertices away from the field's singularities (counts within 15% or 2 even, unless one is none),
+// then the fewest skewed quads (within 20% or 5 even), then the fewest quads over 2.5x the
+// target edge (the same), then the fewest irregular vertices (counts within 5% of each other
+// are even), then the smallest mean corner deviation (better_cage); if none
+// meets them, the valid cage with the smallest mean corner deviation. The choice that was used is
+// reported when it is not the requested one.
+void extract_component(const TriMesh& design, const Partition& partition, const CrossField& field,
+                       const QuadOptions& options, int c, QuadResult* out) {
+  ComponentSearch(design, partition, field, options, c, out).run();
 }
 
 }  // namespace
