@@ -24,21 +24,77 @@ constexpr double kStretchWeight = 1.0;
 // the 5x5 net, 11.1° -> 6.8° but rows 30% less even; with it 7.9°, rows as even as filled).
 constexpr double kFairWeight = 1.0;
 
-}  // namespace
+// square_cage's state: the cage's rows and ideal corners as filled, and per vertex what a
+// sweep reads and writes.
+class Squarer {
+ public:
+  Squarer(const CageChecks& checks, QuadCage& cage, double density);
+  int run(int sweeps, int threads);
 
-int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density, int threads) {
-  const ComponentLocator& locator = checks.locator;
-  const DesignNormals& normals = checks.normals;
-  const int nv = static_cast<int>(cage.vertices.rows());
-  const CageIncidence incidence(cage);
-  const auto& fixed = incidence.on_chain;
-  const auto& quads_of = incidence.quads_of;
-  auto point = [&](int v) { return Vec3(cage.vertices.row(v).transpose()); };
+ private:
+  Vec3 point(int v) const { return Vec3(cage.vertices.row(v).transpose()); }
+  void find_rows();
+  void ideal_corners();
+  void hold_crowded();
+  void colour_vertices();
+  double rest_length(int v, int w) const;
+  double stretch(int v, int w, const Vec3& p) const;
+  double energy(int v, const Vec3& p) const;
+  bool step_vertex(int v);
+
+  const CageChecks& checks;
+  const ComponentLocator& locator;
+  const DesignNormals& normals;
+  QuadCage& cage;
+  const double density;
+  const int nv;
+  const CageIncidence incidence;
+  const std::vector<char>& fixed;
+  const std::vector<std::vector<int>>& quads_of;
   // The rows through each free vertex of four quads: its neighbours in turn (one quad's
   // previous corner is the next quad's next), so ring[0], ring[2] and ring[1], ring[3]
   // are the rows' two sides.
-  std::vector<std::array<int, 4>> ring(nv);
-  std::vector<char> in_rows(nv, 0);
+  std::vector<std::array<int, 4>> ring;
+  std::vector<char> in_rows;
+  std::vector<double> ideal;   // each vertex's ideal corner
+  std::vector<double> scale2;  // each vertex's mean squared edge length as filled
+  std::vector<std::array<double, 4>> rest;  // each free vertex's edge lengths as filled
+  // A vertex is looked at again only once it or a neighbour has moved.
+  // Each vertex's and quad centroid's last triangle (ComponentLocator::closest); a quad's
+  // is written only by its corners, which never step at once (below).
+  std::vector<char> active, moved_now;
+  std::vector<int> hint, quad_hint;
+  std::vector<double> last_step;  // over the vertex's mean edge length
+  std::vector<std::vector<int>> by_colour;  // vertices that may step at once
+};
+
+Squarer::Squarer(const CageChecks& checks, QuadCage& cage, double density)
+    : checks(checks),
+      locator(checks.locator),
+      normals(checks.normals),
+      cage(cage),
+      density(density),
+      nv(static_cast<int>(cage.vertices.rows())),
+      incidence(cage),
+      fixed(incidence.on_chain),
+      quads_of(incidence.quads_of),
+      ring(nv),
+      in_rows(nv, 0),
+      ideal(nv, kPi / 2),
+      scale2(nv, 1.0),
+      rest(nv) {
+  find_rows();
+  ideal_corners();
+  hold_crowded();
+  active = in_rows;
+  moved_now.assign(nv, 0);
+  hint.assign(nv, -1);
+  quad_hint.assign(cage.quads.rows(), -1);
+  last_step.assign(nv, 0.1);
+  colour_vertices();
+}
+
+void Squarer::find_rows() {
   for (int v = 0; v < nv; ++v) {
     if (fixed[v] || quads_of[v].size() != 4) continue;
     std::array<int, 4> next_of, after;
@@ -57,11 +113,12 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     in_rows[v] = closed && ring[v][0] == next_of[at] &&
                  std::set<int>(ring[v].begin(), ring[v].end()).size() == 4;
   }
+}
+
+void Squarer::ideal_corners() {
   // Each vertex's ideal corner: a full turn shared by its quads inside, its angle sum
   // (as filled) shared evenly on a chain, where the loop decides the sum.
-  std::vector<double> ideal(nv, kPi / 2);
   // Each vertex's mean squared edge length as filled (scales second differences).
-  std::vector<double> scale2(nv, 1.0);
   for (int v = 0; v < nv; ++v) {
     const int n = static_cast<int>(quads_of[v].size());
     if (!n) continue;
@@ -77,45 +134,50 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
   // Each free vertex's edges' lengths as filled, in ring order (a relative change costs
   // like a corner's in radians, so squaring does not trade the layout's spacing for thin
   // rectangles).
-  std::vector<std::array<double, 4>> rest(nv);
   for (int v = 0; v < nv; ++v)
     if (in_rows[v])
       for (int i = 0; i < 4; ++i) rest[v][i] = (point(ring[v][i]) - point(v)).norm();
-  auto rest_length = [&](int v, int w) {
-    return rest[v][std::find(ring[v].begin(), ring[v].end(), w) - ring[v].begin()];
-  };
-  auto stretch = [&](int v, int w, const Vec3& p) {
-    const double r = rest_length(v, w);
-    const double x = r > 0 ? ((p - point(w)).norm() - r) / r : 0;
-    return x * x;
-  };
+}
+
+double Squarer::rest_length(int v, int w) const {
+  return rest[v][std::find(ring[v].begin(), ring[v].end(), w) - ring[v].begin()];
+}
+
+double Squarer::stretch(int v, int w, const Vec3& p) const {
+  const double r = rest_length(v, w);
+  const double x = r > 0 ? ((p - point(w)).norm() - r) / r : 0;
+  return x * x;
+}
+
   // What moves with v at p: its corners, its two neighbours' corners in each of its quads,
   // its edges (each in two quads, so half each time), and the rows through v and through
   // its neighbours.
-  auto energy = [&](int v, const Vec3& p) {
-    double e = 0;
-    for (int q : quads_of[v]) {
-      const auto c = corners_from(cage, q, v);
-      const int a = c[1], d = c[2], b = c[3];
-      const Vec3 pa = point(a), pb = point(b), pd = point(d);
-      const double at_v = corner_angle(p, pa, pb) - ideal[v];
-      const double at_a = corner_angle(pa, pd, p) - ideal[a];
-      const double at_b = corner_angle(pb, p, pd) - ideal[b];
-      e += at_v * at_v + at_a * at_a + at_b * at_b +
-           0.5 * kStretchWeight * (stretch(v, a, p) + stretch(v, b, p));
-    }
-    if (!in_rows[v]) return e;
-    const auto& r = ring[v];
-    double rows = ((point(r[0]) + point(r[2]) - 2 * p).squaredNorm() +
-                   (point(r[1]) + point(r[3]) - 2 * p).squaredNorm()) / scale2[v];
-    for (int w : r) {
-      if (!in_rows[w]) continue;
-      const auto& s = ring[w];
-      const int j = static_cast<int>(std::find(s.begin(), s.end(), v) - s.begin());
-      if (j < 4) rows += (p + point(s[(j + 2) % 4]) - 2 * point(w)).squaredNorm() / scale2[w];
-    }
-    return e + kFairWeight * rows;
-  };
+double Squarer::energy(int v, const Vec3& p) const {
+  double e = 0;
+  for (int q : quads_of[v]) {
+    const auto c = corners_from(cage, q, v);
+    const int a = c[1], d = c[2], b = c[3];
+    const Vec3 pa = point(a), pb = point(b), pd = point(d);
+    const double at_v = corner_angle(p, pa, pb) - ideal[v];
+    const double at_a = corner_angle(pa, pd, p) - ideal[a];
+    const double at_b = corner_angle(pb, p, pd) - ideal[b];
+    e += at_v * at_v + at_a * at_a + at_b * at_b +
+         0.5 * kStretchWeight * (stretch(v, a, p) + stretch(v, b, p));
+  }
+  if (!in_rows[v]) return e;
+  const auto& r = ring[v];
+  double rows = ((point(r[0]) + point(r[2]) - 2 * p).squaredNorm() +
+                 (point(r[1]) + point(r[3]) - 2 * p).squaredNorm()) / scale2[v];
+  for (int w : r) {
+    if (!in_rows[w]) continue;
+    const auto& s = ring[w];
+    const int j = static_cast<int>(std::find(s.begin(), s.end(), v) - s.begin());
+    if (j < 4) rows += (p + point(s[(j + 2) % 4]) - 2 * point(w)).squaredNorm() / scale2[w];
+  }
+  return e + kFairWeight * rows;
+}
+
+void Squarer::hold_crowded() {
   // Within two rings of a vertex of six or more quads (left by a collapse) nothing moves
   // (nor do the rows through such vertices count): the limit surface folds there first
   // (better_cage), and the fit of the 5 × 5 net's cage folded beside one once its quads
@@ -131,66 +193,64 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     crowded.swap(next);
   }
   for (int v = 0; v < nv; ++v) in_rows[v] &= !crowded[v];
-  // A vertex is looked at again only once it or a neighbour has moved.
-  std::vector<char> active(in_rows), moved_now(nv, 0);
-  // Each vertex's and quad centroid's last triangle (ComponentLocator::closest); a quad's
-  // is written only by its corners, which never step at once (below).
-  std::vector<int> hint(nv, -1), quad_hint(cage.quads.rows(), -1);
-  std::vector<double> last_step(nv, 0.1);  // over the vertex's mean edge length
+}
+
   // One vertex's step; true if it moved. Reads the corners of its quads and the far ends
   // of the rows through its neighbours, writes only its own position and state.
-  auto step_vertex = [&](int v) {
-    const Vec3 old = point(v);
-    Vec3 normal;
-    const Vec3 at = locator.closest(old, &normal, &hint[v]);
-    double length = 0;
-    for (int w : ring[v]) length += 0.25 * (point(w) - at).norm();
-    if (length <= 0) return false;
-    // No edge grows past twice the target length unless it came longer (oversized
-    // quads, QuadStats, are those past 2.5x), nor shrinks under half of it unless it
-    // came shorter.
-    const int near = normals.nearest_vertex(at);
-    const double target = near >= 0 ? checks.surface.vertex_size[near] / density
-                                    : std::numeric_limits<double>::quiet_NaN();
-    auto out_of_range = [&](const Vec3& p) {
-      if (!(target > 0)) return false;
-      for (int w : ring[v]) {
-        const double now = (p - point(w)).norm(), was = rest_length(v, w);
-        if ((now > 2 * target && now > was) || (now < 0.5 * target && now < was)) return true;
-      }
-      return false;
-    };
-    // A gradient step in the tangent plane (forward differences), at most a tenth of
-    // the edges around: the vertex's last good step, or half of it until the energy
-    // drops; a good step grows by half for the next sweep.
-    const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
-    const double h = 1e-5 * length;
-    const double before = energy(v, at);
-    const Vec3 gradient =
-        t1 * (energy(v, at + h * t1) - before) / h + t2 * (energy(v, at + h * t2) - before) / h;
-    const double slope = gradient.norm();
-    if (slope == 0) return false;
-    double step = std::min({0.1 * length, before / slope, last_step[v] * length});
-    for (int tries = 0; tries < 4; ++tries, step *= 0.5) {
-      Vec3 landed_normal;
-      int landed_hint = hint[v];
-      const Vec3 landed =
-          locator.closest(at - step * gradient / slope, &landed_normal, &landed_hint);
-      if (landed_normal.dot(normal) < 0.5) continue;
-      if (energy(v, landed) >= before || out_of_range(landed)) continue;
-      cage.vertices.row(v) = landed.transpose();
-      bool ok = true;
-      for (int q : quads_of[v])
-        ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees, &quad_hint[q]);
-      if (ok) {
-        hint[v] = landed_hint;
-        last_step[v] = 1.5 * step / length;
-        return true;
-      }
-      cage.vertices.row(v) = old.transpose();
+bool Squarer::step_vertex(int v) {
+  const Vec3 old = point(v);
+  Vec3 normal;
+  const Vec3 at = locator.closest(old, &normal, &hint[v]);
+  double length = 0;
+  for (int w : ring[v]) length += 0.25 * (point(w) - at).norm();
+  if (length <= 0) return false;
+  // No edge grows past twice the target length unless it came longer (oversized
+  // quads, QuadStats, are those past 2.5x), nor shrinks under half of it unless it
+  // came shorter.
+  const int near = normals.nearest_vertex(at);
+  const double target = near >= 0 ? checks.surface.vertex_size[near] / density
+                                  : std::numeric_limits<double>::quiet_NaN();
+  auto out_of_range = [&](const Vec3& p) {
+    if (!(target > 0)) return false;
+    for (int w : ring[v]) {
+      const double now = (p - point(w)).norm(), was = rest_length(v, w);
+      if ((now > 2 * target && now > was) || (now < 0.5 * target && now < was)) return true;
     }
     return false;
   };
+  // A gradient step in the tangent plane (forward differences), at most a tenth of
+  // the edges around: the vertex's last good step, or half of it until the energy
+  // drops; a good step grows by half for the next sweep.
+  const Vec3 t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+  const double h = 1e-5 * length;
+  const double before = energy(v, at);
+  const Vec3 gradient =
+      t1 * (energy(v, at + h * t1) - before) / h + t2 * (energy(v, at + h * t2) - before) / h;
+  const double slope = gradient.norm();
+  if (slope == 0) return false;
+  double step = std::min({0.1 * length, before / slope, last_step[v] * length});
+  for (int tries = 0; tries < 4; ++tries, step *= 0.5) {
+    Vec3 landed_normal;
+    int landed_hint = hint[v];
+    const Vec3 landed =
+        locator.closest(at - step * gradient / slope, &landed_normal, &landed_hint);
+    if (landed_normal.dot(normal) < 0.5) continue;
+    if (energy(v, landed) >= before || out_of_range(landed)) continue;
+    cage.vertices.row(v) = landed.transpose();
+    bool ok = true;
+    for (int q : quads_of[v])
+      ok = ok && !quad_is_bad(locator, normals, cage, q, kMinCornerDegrees, &quad_hint[q]);
+    if (ok) {
+      hint[v] = landed_hint;
+      last_step[v] = 1.5 * step / length;
+      return true;
+    }
+    cage.vertices.row(v) = old.transpose();
+  }
+  return false;
+}
+
+void Squarer::colour_vertices() {
   // Vertices that read each other's positions never step at once: they get different
   // colours (greedy, in vertex order), and a sweep takes the colours in turn, the
   // vertices of one colour on `threads` threads. The result does not depend on the
@@ -208,7 +268,6 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
         for (int u : ring[w]) link(u);
   }
   std::vector<int> colour(nv, -1);
-  std::vector<std::vector<int>> by_colour;
   std::vector<int> taken_by(nv, -1);  // colour → the last vertex that saw it taken
   for (int v = 0; v < nv; ++v) {
     if (!in_rows[v]) continue;
@@ -220,6 +279,9 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     if (c >= static_cast<int>(by_colour.size())) by_colour.resize(c + 1);
     by_colour[c].push_back(v);
   }
+}
+
+int Squarer::run(int sweeps, int threads) {
   const int workers = std::max(1, threads);
   int moved = 0;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
@@ -249,6 +311,13 @@ int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double den
     }
   }
   return moved;
+}
+
+
+}  // namespace
+
+int square_cage(const CageChecks& checks, QuadCage& cage, int sweeps, double density, int threads) {
+  return Squarer(checks, cage, density).run(sweeps, threads);
 }
 
 std::optional<Squared> square_copy(const quad_detail::CageChecks& checks, double density,
