@@ -46,13 +46,11 @@ namespace {
 // irregular vertex no singularity explains. Left as they are: link curves, the curves'
 // first vertices, and turns within kCaptureReach of a singular vertex the curve starts or
 // ends at (a curve arriving at one keeps the separatrix direction it took there), where
-// the walk follows its way to the singularity (lattice: such a turn one cage edge before a
-// singularity, read as a corner, left an irregular vertex unexplained and 31-34 quads
-// oversized in every layout choice), except where an earlier cage of this layout left an
+// the walk follows its way to the singularity (read as a corner, such a turn leaves an
+// irregular vertex unexplained and quads oversized beside it), except where an earlier cage of this layout left an
 // irregular vertex no singularity explains (Layout::costly_nodes, the second reading of
-// QuadOptions::off_node_price): there such a turn is read too, a singular end's included
-// (25 nets, genus 9-49 at h 0.1-0.14: 36 → 32 irregular vertices off singularities,
-// oversized / skewed quads 461 / 548 → 457 / 541; genus 64 unchanged). O(curve vertices +
+// QuadOptions::off_node_price): there such a turn is read too, a singular end's included.
+// O(curve vertices +
 // curves × singularities + kinks × costly spots), every round of build_patches: again on
 // the same curves (their tangents are set again where a curve's tail was registered anew
 // after a stretch of it was taken off).

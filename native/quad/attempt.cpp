@@ -21,8 +21,7 @@ namespace genbrep {
 namespace quad_detail {
 
 // Rounds of place_irregulars (windows edited in one round share no vertex, so a cluster
-// takes several). 25 nets with arrival_snap: 8 → 233 irregular vertices off singularities,
-// 16 → 219, 32 → 219 (converged), the sweep's time 182 → 186 s; genus 64 64 → 65.
+// takes several); more rounds change nothing.
 constexpr int kPlaceRounds = 16;
 
 
@@ -276,6 +275,53 @@ std::set<int> patches_of_bad_quads(const quad_detail::CageChecks& checks, const 
 }
 
 
+// The notes on how an attempt's layout was mended: patches merged to balance, cusps read as
+// quarter turns, arcs at 0 edges, tangles merged and filled again.
+void note_layout_repairs(int c, int merged, int straightened, bool relaxed, int tangle_rounds,
+                         int tangle_patches, quad_detail::Messages* messages) {
+  if (merged)
+    messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
+                           " patches whose sides could not balance merged with a neighbour");
+  if (straightened)
+    messages->notes.push_back("component " + std::to_string(c) + ": " +
+                           std::to_string(straightened) +
+                           " cusp corners read as quarter turns after all, so that the "
+                           "layout's sides balance");
+  if (relaxed)
+    messages->notes.push_back("component " + std::to_string(c) +
+                           ": the layout's sides balance only with some interior arcs at 0 edges");
+  if (tangle_rounds)
+    messages->notes.push_back("component " + std::to_string(c) + ": " +
+                           std::to_string(tangle_patches) +
+                           " patches under quads the untangling left turned over merged with a "
+                           "neighbour and the layout filled again (" +
+                           std::to_string(tangle_rounds) + (tangle_rounds > 1 ? " rounds)" : " round)"));
+}
+
+// The traced curves with the options the rest of an attempt reads: a choice that traced the
+// same curves as an earlier one with the same options gives its result.
+std::size_t traced_key(const Layout& layout, const QuadOptions& options) {
+  std::size_t traced = (options.fit_corners ? (options.global_corners ? 3u : 2u) : 1u) * 1000003u +
+                       static_cast<std::size_t>(options.max_balance_rounds) * 2u +
+                       (options.kink_nodes ? 1u : 0u);
+  for (const auto& curve : layout.curves)
+    for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
+  return traced;
+}
+
+// The quantized layout: arcs' ends and counts, patches' sides.
+std::size_t quantized_key(const PatchLayout& patches) {
+  std::size_t fingerprint = patches.arcs.size();
+  for (const auto& arc : patches.arcs)
+    for (int value : {arc.vertices.front(), arc.vertices.back(), arc.count})
+      fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(value);
+  for (const auto& patch : patches.patches)
+    for (const auto& side : patch.sides)
+      for (const auto& [a, reversed] : side)
+        fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
+  return fingerprint;
+}
+
 // One attempt at one component: layout, quantization, filling, into *out. Throws
 // Error{StageFailure} when the layout cannot be quantized or the filled cage is invalid,
 // or when a fingerprint is in `seen` (a layout an earlier choice already had), or once
@@ -313,11 +359,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
   quad_detail::trace_separatrices(surface, layout, options, *messages);
   // The rest is deterministic in the traced curves and the options it reads: a choice
   // that traced the same curves as an earlier one with the same options gives its result.
-  std::size_t traced = (options.fit_corners ? (options.global_corners ? 3u : 2u) : 1u) * 1000003u +
-                       static_cast<std::size_t>(options.max_balance_rounds) * 2u +
-                       (options.kink_nodes ? 1u : 0u);
-  for (const auto& curve : layout.curves)
-    for (int v : curve.vertices) traced = traced * 1000003u + static_cast<std::size_t>(v) + 1;
+  const std::size_t traced = traced_key(layout, options);
   keys->traced = traced;
   work->traced = work_so_far();
   GENBREP_CHECK(!seen.count(traced), Code::StageFailure, same_layout(c));
@@ -330,7 +372,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
   std::set<std::pair<int, int>> merged_arcs;  // stretches merge_patch took off, by their ends
   // Each round changes the layout in a few places: only the patches there are read again.
   quad_detail::PatchReading reading;
-  // A cage whose untangling leaves quads turned over (one tangle, as measured) has the
+  // A cage whose untangling leaves quads turned over (a tangle) has the
   // patches those quads came from merged with a neighbour, and the layout quantized and
   // filled again (QuadOptions::max_tangle_rounds).
   for (int repair = 0;; ++repair) {
@@ -362,14 +404,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
     }
     if (repair == 0) {
       // Different choices often give the same quantized layout: it is filled only once.
-      std::size_t fingerprint = patches.arcs.size();
-      for (const auto& arc : patches.arcs)
-        for (int value : {arc.vertices.front(), arc.vertices.back(), arc.count})
-          fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(value);
-      for (const auto& patch : patches.patches)
-        for (const auto& side : patch.sides)
-          for (const auto& [a, reversed] : side)
-            fingerprint = fingerprint * 1000003u + static_cast<std::size_t>(2 * a + reversed);
+      const std::size_t fingerprint = quantized_key(patches);
       keys->quantized = fingerprint;
       work->quantized = work_so_far();
       GENBREP_CHECK(!seen.count(fingerprint), Code::StageFailure, same_layout(c));
@@ -400,23 +435,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
     ++tangle_rounds;
     tangle_patches += now;
   }
-  if (merged)
-    messages->notes.push_back("component " + std::to_string(c) + ": " + std::to_string(merged) +
-                           " patches whose sides could not balance merged with a neighbour");
-  if (straightened)
-    messages->notes.push_back("component " + std::to_string(c) + ": " +
-                           std::to_string(straightened) +
-                           " cusp corners read as quarter turns after all, so that the "
-                           "layout's sides balance");
-  if (relaxed)
-    messages->notes.push_back("component " + std::to_string(c) +
-                           ": the layout's sides balance only with some interior arcs at 0 edges");
-  if (tangle_rounds)
-    messages->notes.push_back("component " + std::to_string(c) + ": " +
-                           std::to_string(tangle_patches) +
-                           " patches under quads the untangling left turned over merged with a "
-                           "neighbour and the layout filled again (" +
-                           std::to_string(tangle_rounds) + (tangle_rounds > 1 ? " rounds)" : " round)"));
+  note_layout_repairs(c, merged, straightened, relaxed, tangle_rounds, tangle_patches, messages);
   stats->oversized_quads = quad_detail::oversized_quads(checks, *cage, options.density, kOversized);
   if (stats->oversized_quads) {
     char text[200];
@@ -439,13 +458,13 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
   GENBREP_CHECK(stats->flipped_quads == 0 && stats->degenerate_quads == 0, Code::StageFailure,
                 "the cage has " + std::to_string(stats->flipped_quads) + " flipped and " +
                     std::to_string(stats->degenerate_quads) + " degenerate quads");
-  // The irregular vertices no singularity explains, each priced within off_node_radius ×
+  // The irregular vertices no singularity explains, each priced within kOffNodeRadius ×
   // its reach (in kSingularReach units: local target edges or its own edges) if read again.
   out->unexplained.clear();
   for (const quad_detail::Irregular& x :
        count_off_singularities(checks, *cage, singular, options.density, stats))
     out->unexplained.push_back(
-        {x.point, options.off_node_radius * x.reach / quad_detail::kSingularReach});
+        {x.point, kOffNodeRadius * x.reach / quad_detail::kSingularReach});
   stats->size_field_quads = in.asked;
 }
 

@@ -29,10 +29,9 @@ void add_messages(const quad_detail::Messages& messages, QuadResult* out) {
   out->notes.insert(out->notes.end(), messages.notes.begin(), messages.notes.end());
 }
 
-// How often the component's triangles are split for tracing (QuadOptions::
-// trace_edges_per_cage_edge): the mean target size over the mean length of its edges.
+// How often the component's triangles are split for tracing (kTraceEdgesPerCageEdge): the
+// mean target size over the mean length of its edges.
 int refine_levels(const quad_detail::Surface& s, const QuadOptions& options) {
-  if (options.trace_edges_per_cage_edge <= 0) return 0;
   double size = 0, length = 0;
   int edges = 0;
   for (int v : s.vertices) size += s.vertex_size[v];
@@ -45,7 +44,7 @@ int refine_levels(const quad_detail::Surface& s, const QuadOptions& options) {
   }
   if (!edges || length <= 0) return 0;
   int levels = 0;
-  for (double span = size / (length / edges); span < options.trace_edges_per_cage_edge &&
+  for (double span = size / (length / edges); span < kTraceEdgesPerCageEdge &&
                                               levels < options.max_refine_levels;
        span *= 2)
     ++levels;
@@ -73,7 +72,7 @@ double density_raise(const quad_detail::Surface& s, const QuadOptions& options) 
   return quads > 0 && quads < wanted ? std::sqrt(wanted / quads) : 1.0;
 }
 
-// Whether a cage meets issue 5's targets (interior valence 4 ≥ 95%, boundary valence 3
+// Whether a cage meets the quality targets (interior valence 4 ≥ 95%, boundary valence 3
 // ≥ 90%, mean corner deviation ≤ 12°).
 bool meets_targets(const QuadStats& s) {
   return s.interior_valence4_fraction() >= 0.95 && s.boundary_valence3_fraction() >= 0.90 &&
@@ -121,28 +120,17 @@ QuadResult extract_cages(const TriMesh& design, const Partition& partition,
 
 
 namespace quad_detail {
-constexpr double kEvenDensityMiss = 0.1;  // ~10%
-// A cage within 0.8–1.2× the quads its size field asks for beats one outside, and of two
-// outside the nearer, by more than kEvenDensityMiss in log ratio (issue 5: density
-// follows the size field): arches' second component, whose requested layout has 1.25×
-// once pairs are drawn together, keeps a choice with 0.92×, and a sphere whose density is
-// raised for its singularities the densest of its choices (all under half of what it asks).
-// Then fewer squeezed arcs (patch rows gutted to half the edges their length asks for or
-// less): on the genus-16 net at h 0.11 a choice with none off had a stub 2-3 quads across
-// (its end an arc of 2 edges where the size field asks 4.1), and was kept for its none off
-// over one with 2 off and the stub 6 across. Over 48 conversions (bench/quad_judge,
-// off_node_count 3) this rule took the kept cages' squeezed arcs 6 → 1 and their irregular
-// vertices off singularities 52 → 57 (oversized quads 1423 → 1409, skewed 1357 → 1344).
-// Irregular vertices away from singularities count next (issue 5 wants none): none
-// against some always wins; otherwise counts within 15% (or 2) of each other are even.
-// Then skewed quads (a corner over 45° off square), counts within 20% (or 5) even: the
-// 3 x 3 net's requested layout (15 off, 4.8°, 35 skewed, rows crumpled at two junctions)
-// against a sparser choice (13 off, 5.2°, 20 skewed; was kept for its 13 alone). Then
-// quads over 2.5x the target edge (oversized_quads), counts within 20% (or 5) even: the
-// genus-36 net at h 0.125 kept a choice with 63 of them, a strut between two holes given
-// half the columns, over one with 28, the two even on every count before and 0.09° apart
-// in mean corner deviation. Irregular counts within 5% are even: lattice's requested layout
-// had 130 at 9.3° against the joined layout's 131 at 6.8°, and the first one's fit folded.
+// Two cages whose density misses (QuadStats::size_field_miss, a log ratio) differ by at
+// most this are even on density.
+constexpr double kEvenDensityMiss = 0.1;
+// The ranking (better_cage, detail/choose.h), each count with a margin within which two
+// cages are even, so that a small gain on one count does not outweigh the ones after it:
+// a cage within 0.8–1.2× the quads its size field asks for beats one outside, and of two
+// outside the nearer; then fewer squeezed arcs (a row of patches gutted to balance);
+// then fewer irregular vertices away from singularities (none against some always wins,
+// otherwise within 15% or 2 even); then fewer skewed quads, then fewer oversized quads
+// (each within 20% or 5 even); then fewer irregular vertices (within 5% even); then the
+// smaller mean corner deviation.
 bool better_cage(const QuadStats& a, const QuadStats& b) {
   return better_cage(a, meets_targets(a), b, meets_targets(b));
 }
@@ -172,10 +160,8 @@ bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meet
 }
 
 // A second reading is kept only if it leaves fewer irregular vertices off singularities
-// (what it is for) and is the better cage: the genus-36 net at h 0.14 kept one that went
-// 4 → 6 off for the one quad the first had collapsed, with a valence 7 and two 3s crowded
-// at a hole corner. Over 48 conversions (bench/quad_judge) requiring fewer took 57 → 54
-// off singularities, oversized quads 1409 → 1398, skewed 1344 → 1311.
+// (what it is for) and is the better cage: better_cage alone can prefer one with more of
+// them for a quad the first reading had collapsed.
 bool better_second_reading(const QuadStats& second, const QuadStats& first) {
   return second.irregular_off_singularities < first.irregular_off_singularities &&
          better_cage(second, first);
@@ -238,9 +224,7 @@ std::vector<Variant> layout_choices(const QuadOptions& options) {
           name += "unbalanced patches merged";
         } else if (!o.join_parallel && !(what[0] == '\0' && corners != 2)) {
           // The requested layout (corners chosen either way) merges unbalanced patches too:
-          // through Blender, lattice's was one small patch from balancing, and without
-          // merging a sparser choice with 22 irregular vertices off singularities was kept
-          // (4 with the merge).
+          // a layout one small patch from balancing is otherwise lost to a sparser choice.
           o.max_balance_rounds = 0;
         }
         variants.push_back({name, o});
@@ -392,8 +376,8 @@ ComponentSearch::ComponentSearch(const TriMesh& design, const Partition& partiti
              : std::min(4, static_cast<int>(std::thread::hardware_concurrency())));
   inputs.emplace(ComponentInputs{surface, *checks_, singular, asked, options.density});
   // QuadOptions::pair_second_readings: the first batch holds the requested layout and its
-  // sibling, however many threads there are (not where the work allows the requested one
-  // only: work_per_component 0).
+  // pair (its arrivals flipped), however many threads there are (not where the work allows
+  // the requested one only: work_per_component 0).
   pair_readings =
       options.pair_second_readings && options.work_per_component > 0 && variants.size() >= 2;
 }
@@ -477,9 +461,8 @@ void ComponentSearch::search() {
     // adds to seen_layouts while later attempts still run).
     const std::set<std::size_t> seen_before = seen_layouts;
     // Results are taken as their attempts end, in order; once the search stops, the
-    // batch's later attempts are dropped (on the 6 x 6 net the requested layout's sibling
-    // ran 1.8 s past it, for a result the search would not look at). Also when a result
-    // throws: every worker is told and joined.
+    // batch's later attempts are dropped rather than run for results the search would not
+    // look at. Also when a result throws: every worker is told and joined.
     std::atomic<bool> drop{false};
     std::vector<std::thread> workers;
     struct JoinAll {
@@ -491,7 +474,7 @@ void ComponentSearch::search() {
           if (worker.joinable()) worker.join();
       }
     } join_all{drop, workers};
-    // On one thread the pair's sibling runs after the requested layout, on this one.
+    // On one thread the requested layout's pair runs after the requested layout, on this one.
     for (size_t i = 1; i < batch && threads > 1; ++i)
       workers.emplace_back([&, i, first = k, only = pair && i == 1] {
         attempt(first + i, seen_before, &attempts[i], quad_detail::Dropped(&drop), only);
@@ -537,7 +520,7 @@ void ComponentSearch::search() {
     // if it then meets the targets (no choice is tried after meeting): the others are
     // dropped and it is squared on every thread. If it still misses, the others that had
     // ended before the drop are taken as they are, and the next batch starts at the first
-    // one that was cut short (the 8 x 8 net ran its second choice, 13 s, twice).
+    // one that was cut short.
     size_t taken = batch;
     for (size_t i = 0; i < taken && !stop; ++i, ++k) {
       if (i > 0 && ((first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) ||
@@ -593,7 +576,7 @@ void ComponentSearch::search() {
       if (k == 0) requested_stats = judged;
       // Collapsed quads mean the layout itself was broken there: such a cage ranks below
       // every collapse-free one (better_cage), but a valid field-aligned cage still beats the
-      // fallback (the genus-64 net's: 97.6% valence 4 at 13.9°, against the fallback's 85%).
+      // fallback, which is not aligned at all.
       if (best < 0 || quad_detail::better_cage(a.stats, meets, best_stats, best_meets))
         keep(k, a, meets);
       if (comfortably_meets_targets(judged) && !judged.collapsed_quads && best == int(k))
@@ -606,8 +589,7 @@ void ComponentSearch::search() {
 void ComponentSearch::try_without_kinks() {
   // Last field-aligned resort before the fallback cage: the requested layout without kink
   // nodes (QuadOptions::kink_nodes). Their corners can leave a layout that no integer counts
-  // balance (lattice's requested layout at h 0.125: 266 patches, 14 merged, none balance),
-  // and where every choice the component's work allowed failed so, the layout as it is
+  // balance even after merges, and where every choice the component's work allowed failed so, the layout as it is
   // read without them still gives a field-aligned cage. One more attempt, on this thread.
   if (best < 0 && variants[0].options.kink_nodes) {
     Variant plain = variants[0];
@@ -660,8 +642,7 @@ void ComponentSearch::report_kept() {
     square_kept(checks, variants[best].options.density, c, threads, &best_cage, &best_stats,
                 &out->notes);
   // Counted again on the squared cage: squaring moves the vertices round an irregular
-  // one, and with them its mean edge, so its reach (48 conversions: one more, the 3 x 3
-  // net at h 0.115, a 5 whose reach fell under its singularity's distance).
+  // one, and with them its mean edge, so its reach.
   count_off_singularities(checks, best_cage, singular, variants[best].options.density,
                           &best_stats);
   if (!meets_targets(best_stats)) {

@@ -193,8 +193,8 @@ void Filler::fill_patch(const Patch& patch, std::vector<int>* quad_patch) {
     Eigen::SparseMatrix<double> matrix(n, n);
     matrix.setFromTriplets(triplets.begin(), triplets.end());
     // Diagonally dominant (an M-matrix): BiCGSTAB with a diagonal preconditioner converges
-    // in a few dozen iterations, where a sparse LU's set-up per patch dominated the fill
-    // (some 3800 patches of about 100 unknowns on the 6 x 6 net); LU if it does not.
+    // in a few dozen iterations, where a sparse LU's set-up per patch would dominate the fill
+    // (thousands of patches of about 100 unknowns); LU if it does not.
     Eigen::MatrixX2d solution(n, 2);
     bool solved = true;
     {

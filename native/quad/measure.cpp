@@ -40,8 +40,8 @@ DesignNormals::DesignNormals(const TriMesh& design) {
   lo_ = Vec3::Constant(1e300);
   Vec3 hi = Vec3::Constant(-1e300);
   for (const Vec3& p : point_) lo_ = lo_.cwiseMin(p), hi = hi.cwiseMax(p);
-  // Cells about 1.5 mean edges wide hold 2–3 vertices where the surface passes (a 64th
-  // of the box held 5 on the 6 x 6 net, 27 cells searched per lookup), but at most
+  // Cells about 1.5 mean edges wide hold 2–3 vertices where the surface passes (27 cells
+  // searched per lookup), but at most
   // 16 per vertex in all (a thin plate's box is mostly empty).
   double edges = 0;
   long counted = 0;

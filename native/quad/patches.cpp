@@ -1,11 +1,8 @@
 // quad/patches.cpp — from layout curves to four-sided patches (quad/quad.h step 1).
 // Rounds after the first fill and read again only the patches around vertices where the
-// layout changed (cuts traced, stretches removed, nodes added): on the 5 × 5 net the
-// first round fills 591k refined triangles, later ones 67 to 389k, and build_patches
-// takes 0.9–1.0 s per layout choice instead of 1.4–1.7 s, with the same patches. A
-// PatchReading carries this across calls: the balance rounds (quad.cpp: a patch merged,
-// cusps taken back) read again only what changed, and the first round of a later call
-// costs like a later round (5 × 5 net, a choice of 8 balance rounds: 0.43 → 0.2 s each).
+// layout changed (cuts traced, stretches removed, nodes added), with the same patches as a
+// full fill. A PatchReading carries this across calls: the balance rounds (attempt.cpp: a
+// patch merged, cusps taken back) read again only what changed.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -179,10 +176,9 @@ PatchLayout PatchBuilder::run(Messages& messages) {
     for (int key : fresh_keys) examine(key);
     // Once the rounds stall (half of fix_rounds_without_progress without fewer patches to
     // fix), an override read where the layout was different (the halfedge a corner then)
-    // no longer hides a dangling end: on the 5 x 5 net such an end left one pinched strip
-    // that the cuts never resolved. Before that the overrides stand (honouring dangling
-    // ends from the start gave the 6 x 6 net's CLI cage 191 irregular vertices away from
-    // singularities instead of 158).
+    // no longer hides a dangling end, which can leave a pinched strip that the cuts never
+    // resolve. Before that the overrides stand (honouring dangling ends from the start
+    // leaves more irregular vertices away from singularities).
     const bool stalled = round - fewest_round >= std::max(1, (stall > 0 ? stall : 24) / 2);
     // Every patch, in key order: validity and, if invalid, the fix this round (a patch is
     // looked at again after its corners are re-read: --p below).
@@ -231,7 +227,7 @@ std::vector<int> PatchBuilder::refill() {
   } else {
     std::vector<int> changed;
     // Directions are compared, and updated for the next round, only on curve edges (of
-    // either round), in place: a copy of all of them is 43 MB on the 5 × 5 net.
+    // either round), in place: a copy of all of them is large on a fine component.
     for (int e = 0; e < static_cast<int>(layout.edge_curve.size()); ++e) {
       const bool curve = layout.edge_curve[e] >= 0 || st.last_edge_curve[e] >= 0;
       bool differs = layout.edge_curve[e] != st.last_edge_curve[e];
@@ -330,11 +326,8 @@ void PatchBuilder::examine(int key) {
                     sector_angle(s, layout, h_out, h_in,
                                  singular == singular_valence.end() ? 0 : singular->second),
                     2};
-      const int together =
-          options.node_readings
-              ? node_quarters(s, layout, h_out,
-                              singular == singular_valence.end() ? 0 : singular->second)
-              : -1;
+      const int together = node_quarters(s, layout, h_out,
+                                         singular == singular_valence.end() ? 0 : singular->second);
       const int alone = static_cast<int>(std::lround(corner.angle / (kPi / 2)));
       corner.quarters =
           std::clamp(together >= 0 ? together : alone, options.cusp_corners ? 0 : 1, 3);
@@ -526,9 +519,9 @@ PatchBuilder::Outcome PatchBuilder::split_into_sides(const std::vector<int>& fac
     }
   }
   // A cusp patch collapses (fill.cpp) onto one curve, so it must be thin: the side
-  // across from its empty side short (QuadOptions::cusp_collapse_across target edges;
+  // across from its empty side short (kCuspCollapseAcross target edges;
   // interior arcs may quantize to 0) and the patch narrow on average (area over length,
-  // cusp_collapse_width; a thin triangle on a base of one edge is half an edge wide),
+  // kCuspCollapseWidth; a thin triangle on a base of one edge is half an edge wide),
   // or the collapse squeezes the quads beside it. Nor may it touch the component's
   // border (a loop: the collapse glues its two long sides onto each other, and a chain
   // must stay on its loop). Otherwise its cusps read as quarter turns and it is
@@ -541,8 +534,8 @@ PatchBuilder::Outcome PatchBuilder::split_into_sides(const std::vector<int>& fac
       const double along = 0.5 * d * (side_target(out.arcs, patch, (k + 1) % 4) +
                                        side_target(out.arcs, patch, (k + 3) % 4));
       collapsible &=
-          side_target(out.arcs, patch, (k + 2) % 4) * d < options.cusp_collapse_across &&
-          patch.quads * d * d / std::max(along, 1.0) < options.cusp_collapse_width;
+          side_target(out.arcs, patch, (k + 2) % 4) * d < kCuspCollapseAcross &&
+          patch.quads * d * d / std::max(along, 1.0) < kCuspCollapseWidth;
     }
   if (cusp) {
     for (const auto& arcs : patch.sides)
@@ -609,7 +602,7 @@ void PatchBuilder::apply_fixes() {
   int traced = 0;
   for (const Fix& fix : fixes) {
     bool done = false;
-    if (fix.faces && options.cut_pinches &&
+    if (fix.faces &&
         cut_pinch(s, layout, *fix.faces, fix.pinch_from, fix.pinch_to)) {
       done = true;
       ++out.pinches_cut;
@@ -669,10 +662,9 @@ void PatchBuilder::force_corners(const Cycle& c, Fix& fix) const {
 }
 
 // Cuts from the non-node vertices of the cycles, the farthest from any node first, at
-// most options.middle_cuts_per_stretch from one stretch between nodes: the middle of
+// most kMiddleCutsPerStretch from one stretch between nodes: the middle of
 // one long arc may lie where the patch is a strip one triangle wide, and no cut traces
-// there (the 6 x 6 net's requested layout cycled on such a patch, its 24 cuts all
-// from one arc).
+// there, and the rounds would cycle with every cut from that arc.
 Fix PatchBuilder::middle_cuts(const std::vector<Cycle>& cycles) const {
   std::vector<std::pair<int, Cut>> ranked;
   std::vector<int> stretch_of;  // per ranked entry: its stretch (cycle and run of it)
@@ -709,8 +701,7 @@ Fix PatchBuilder::middle_cuts(const std::vector<Cycle>& cycles) const {
   std::vector<int> taken(stretches, 0);
   Fix fix;
   for (int k : order)
-    if (fix.cuts.size() < 24 && (options.middle_cuts_per_stretch <= 0 ||
-                                 taken[stretch_of[k]]++ < options.middle_cuts_per_stretch))
+    if (fix.cuts.size() < 24 && taken[stretch_of[k]]++ < kMiddleCutsPerStretch)
       fix.cuts.push_back(ranked[k].second);
   return fix;
 }

@@ -22,8 +22,7 @@
 // singularities can explain (rivals_of), as the cage's count does.
 // Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
 // (a dislocation: the singular vertex one edge off); one edit rarely mends them, two often
-// do (genus-36 net at h 0.12: a search of the cage found 2 of 49 with one edit, 25 with
-// two; the three-edit search took the cage's 18 left to 14). A 3 and a 5 the layout left a
+// do, three more. A 3 and a 5 the layout left a
 // few edges apart, away from any singularity (rows shifting by one where a sliver or cusp
 // collapsed), need more edits than that: sequences leaving as many unexplained and no more
 // irregular vertices that draw them nearer each other are ranked too, after those leaving
@@ -35,8 +34,7 @@
 // window) more per edit beyond three; windows searched in vain are not searched again
 // until an edit touches them (or the climb is raised), nor windows whose count finds none
 // unexplained; rivals: O(irregular) per window, their pairs sorted once and merged into
-// each step's (the genus-36 net at h 0.135, alone on the machine: quad 63 → 43 s against
-// sorting them all at each step).
+// each step's rather than sorted at each step.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -66,14 +64,11 @@ constexpr size_t kKeptSequences = 6;
 constexpr double kShedAngle = 225.0 * M_PI / 180.0;
 // Sequences of three edits or more taken on by one more where none helps (the best by
 // Score among those leaving no more unexplained vertices, and as many among those leaving
-// up to PlaceSettings::climb more; PlaceSettings::max_edits). 48 conversions with 16
-// climbing instead of 64: 14 unexplained against 8, 641 s against 649.
+// up to PlaceSettings::climb more; PlaceSettings::max_edits).
 constexpr size_t kDeepPrefixes = 64;
 // Drawing pairs together (PlaceSettings::draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
-// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets,
-// before the three-edit search's fix below: 297 → 276 with 3 and 0.25; 278 with 6 and
-// 0.25; 284 with 6 and 0.5).
+// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away.
 constexpr double kPairSpreadCap = 3.0;
 constexpr double kPairCloser = 0.25;
 
@@ -311,8 +306,8 @@ std::vector<std::pair<Score, State>> search_sequences(State& s, ScoreNow score_n
     keep(score_now());
     next_edit([&] { keep(score_now()); });
   });
-  // Sequences that only draw a pair together do not spare the three-edit search (when
-  // they did, the 25 nets had 276 unexplained vertices instead of 245).
+  // Sequences that only draw a pair together do not spare the three-edit search: it finds
+  // sequences that leave fewer.
   auto fewer = [&] {
     return std::any_of(kept.begin(), kept.end(), [&](const auto& k) {
       return std::get<0>(k.first) < std::get<0>(before);

@@ -20,8 +20,7 @@ namespace {
 // radians.
 constexpr double kStretchWeight = 1.0;
 // square_cage: what the rows' unevenness (second differences along them, over the edge
-// length, squared) costs against corners; without it squaring makes the rows wave (on
-// the 5x5 net, 11.1° -> 6.8° but rows 30% less even; with it 7.9°, rows as even as filled).
+// length, squared) costs against corners; without it squaring makes the rows wave.
 constexpr double kFairWeight = 1.0;
 
 // square_cage's state: the cage's rows and ideal corners as filled, and per vertex what a
@@ -180,8 +179,7 @@ double Squarer::energy(int v, const Vec3& p) const {
 void Squarer::hold_crowded() {
   // Within two rings of a vertex of six or more quads (left by a collapse) nothing moves
   // (nor do the rows through such vertices count): the limit surface folds there first
-  // (better_cage), and the fit of the 5 × 5 net's cage folded beside one once its quads
-  // were squared.
+  // (better_cage), and squaring beside one can make the fit fold.
   std::vector<char> crowded(nv, 0);
   for (int v = 0; v < nv; ++v) crowded[v] = quads_of[v].size() >= 6;
   for (int grow = 0; grow < 2; ++grow) {

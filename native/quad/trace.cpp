@@ -22,9 +22,8 @@ namespace genbrep::quad_detail {
 namespace {
 // A walk takes the shortest free path to a singular vertex ahead (route_to) when it lies
 // within acos(kRouteCos) = 18° of the walk's direction: there stepping to the neighbour
-// nearest to it goes straight on past it one row over. With 0.6 (every capture), 0.8, 0.9
-// and 0.98 the nets' irregular vertices off singularities and skewed quads fell too, but
-// lattice's cage had 4-10 off where it has none (docs/quad_method.md).
+// nearest to it goes straight on past it one row over. A wider cone routes walks that
+// should have followed the field.
 constexpr double kRouteCos = 0.95;
 }  // namespace
 
@@ -379,9 +378,9 @@ bool trace_direction(const Surface& s, Layout& layout, int vertex, std::vector<i
     // singularity at less than a third of an edge length would leave a sliver patch. Only
     // along one of its own separatrix directions that is still free (free_arrival), by the
     // shortest free path (route_to): stepping to the neighbour nearest to it can run past
-    // it one row of triangles over, where the rows are long and thin along the trace (the
-    // 6 x 6 net: two separatrices from singularities 0.6 apart on a strut ran side by side
-    // 0.007 apart, and one patch had to take all its rows through that strip).
+    // it one row of triangles over, where the rows are long and thin along the trace (two
+    // separatrices then run side by side a sliver apart, and one patch has to take all its
+    // rows through that strip).
     if (route.empty())
       for (size_t i = 0; i < layout.attractors.size(); ++i) {
         const int a = layout.attractors[i];

@@ -45,14 +45,6 @@ std::array<int, 4> corners_from(const QuadCage& cage, int q, int v) {
           cage.quads(q, (k + 3) % 4)};
 }
 
-// square_cage: what a relative change of edge length costs against a corner's change in
-// radians.
-constexpr double kStretchWeight = 1.0;
-// square_cage: what the rows' unevenness (second differences along them, over the edge
-// length, squared) costs against corners; without it squaring makes the rows wave (on
-// the 5x5 net, 11.1° -> 6.8° but rows 30% less even; with it 7.9°, rows as even as filled).
-constexpr double kFairWeight = 1.0;
-
 // A quad with a corner under `min_corner_degrees`, or turned over by measure_cage's test
 // (turned_over). `hint`: the triangle under the centroid when last looked at
 // (ComponentLocator::closest; updated), or null.
@@ -251,8 +243,7 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
         continue;
       if (shared) continue;
       // The link condition: a and c share no edge neighbour but b and d (after this
-      // batch's earlier merges), or two edges would become one, held twice the same way
-      // (the 8 x 8 net's second choice failed so after its 13 s).
+      // batch's earlier merges), or two edges would become one, held twice the same way.
       auto now = [&](int v) { return edit.merged_into[v] >= 0 ? edit.merged_into[v] : v; };
       std::set<int> around_a;
       for (int x : edit.incidence.neighbours[a]) around_a.insert(now(x));
@@ -263,9 +254,8 @@ int collapse_diagonals(const ComponentLocator& locator, QuadCage& cage,
       }
       if (linked) continue;
       // Nor may two quads round the merged vertex share three corners (one's diagonal the
-      // other's edge): the cage would pinch there, every edge still held twice (genus 64 at
-      // h 0.1: its requested layout failed so, and the search kept another choice with 40
-      // irregular vertices off singularities; refused, the requested layout leaves 14).
+      // other's edge): the cage would pinch there, every edge still held twice, and the
+      // layout choice would fail.
       // Not in the pass that makes doublets on purpose (their two quads share three
       // corners until remove_doublets joins them).
       if (!doublets && pinches(edit, cage, q, a, c, now)) continue;
@@ -316,8 +306,7 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
       smooth_cage(locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());
   // A fold that smoothing cannot open (a grid cell turned over inside a regular region):
   // take the quad out by collapsing a diagonal, then smooth again, while collapses are
-  // possible. 32 rounds: a genus-25 net's requested layout (67 bad quads, 102 collapses)
-  // needed more than 8.
+  // possible, at most 32 rounds (a large tangle needs many).
   *collapsed = 0;
   for (int attempt = 0; attempt < 32 && !bad.empty(); ++attempt) {
     dropped.check();
@@ -330,9 +319,8 @@ int untangle_cage(const CageChecks& checks, QuadCage& cage, int max_rounds, int*
     moved += static_cast<int>(
         smooth_cage(locator, normals, cage, max_rounds, kMinCornerDegrees, &bad).size());
   }
-  // No pass opening thin quads after the collapses: one over every quad under 30° was
-  // undone on the 5 x 5 and 6 x 6 nets every time (it left 17 and 12 others under 5°),
-  // after 0.6 s of smoothing on the 6 x 6 net; the evening out and squaring open them.
+  // No pass opening thin quads after the collapses: it leaves others squeezed; the
+  // evening out and squaring open them.
   return moved;
 }
 

@@ -16,6 +16,9 @@ namespace genbrep::quad_detail {
 // Quads with an edge longer than this × the local target edge length are oversized
 // (QuadStats::oversized_quads).
 constexpr double kOversized = 2.5;
+// A second reading prices the nodes within this × an unexplained vertex's reach (in
+// kSingularReach units) of it: about the ring of patches around it.
+constexpr double kOffNodeRadius = 1.0;
 
 // The layout's two fingerprints, set as extract_once reaches them: the traced curves (with
 // the options the rest reads) and the quantized patch layout.

@@ -61,8 +61,7 @@ class DesignNormals {
   bool flipped(const Vec3 (&corner)[4]) const;
   // Whether the design turns away from the quad at all four corners (its normal there
   // more than acos(kThinPartCosine) from the quad's, `across` unnormalized): a quad cut
-  // across a strut, its corners on opposite sides (seen on a genus-9 net, h 0.1: corners on
-  // faces facing ±x, the quad facing −z, its centre 0.19 from the design).
+  // across a strut, its corners on opposite sides of it.
   bool spans_thin_part(const Vec3 (&corner)[4], const Vec3& across) const;
 
  private:
@@ -120,9 +119,8 @@ struct SingularPoint {
 };
 // How far a singularity explains an irregular vertex, in edges (the vertex's own mean
 // edge or the local target edge, the longer): a traced singular node can end up about one
-// edge off after the evening out and the merges of quantization (lattice: valence-5
-// vertices 1.0–1.6 target edges from their −1 singularity; merged ones, valence 6 and 7,
-// up to 2.2 target edges where the cage is twice as coarse as the target).
+// edge off after the evening out and the merges of quantization, and merged ones (valence
+// 6 and 7) further where the cage is coarser than the target.
 constexpr double kSingularReach = 2.0;
 // Interior vertices of `cage` (not on a boundary chain) of valence ≠ 4 whose quarter turns
 // (4 − valence) are not all explained by singularities of `singular` of the same sign
@@ -198,12 +196,9 @@ bool faces_away(const ComponentLocator& locator, const Vec3 (&corner)[4], int* h
 // move they allow never makes a cage the measure rejects): DesignNormals::flipped, and
 // unless the quad's normal is within acos(kFaceCheckCosine) = 30° of the nearest design
 // vertex's and that vertex is not on a crease, faces_away. (On a crease the vertex's
-// normal is the mean of two sides: a quad folded over the genus-16 net's crease (h 0.12,
-// node price 2) agreed with it but was 95° from the triangle under its centre.) The
-// design vertex nearest a quad's centre can lie round a fillet from the surface under it:
-// the 5 x 5 net (h 0.12, traces reaching singularities by route_to) had quads at 92° and
-// 114° to the triangle under them that agreed with that vertex within 45°, the bound
-// before. Looking up every quad costs 2.2 s on the 6 x 6 net.
+// normal is the mean of two sides, and a quad folded over it can agree with that mean.
+// The design vertex nearest a quad's centre can also lie round a fillet from the surface
+// under it, hence the tight 30°.) Looking up every quad's triangle is what this costs.
 constexpr double kFaceCheckCosine = 0.866;
 bool turned_over(const DesignNormals& normals, const ComponentLocator& locator,
                  const Vec3 (&corner)[4], int* hint = nullptr);

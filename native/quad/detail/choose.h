@@ -6,9 +6,10 @@
 namespace genbrep::quad_detail {
 
 // Whether cage a is to be kept rather than cage b among a component's layout choices:
-// meeting issue 5's targets, then no collapsed quad, then (both meeting) density, squeezed
-// arcs, irregular vertices off singularities, skewed quads, irregular vertices, each with
-// its margin, then the smaller mean corner deviation (quad.cpp).
+// meeting the quality targets, then no collapsed quad, then (both meeting) density,
+// squeezed arcs, irregular vertices off singularities, skewed quads, oversized quads,
+// irregular vertices, each with its margin, then the smaller mean corner deviation
+// (choose.cpp).
 bool better_cage(const QuadStats& a, const QuadStats& b);
 // The same with whether each meets the targets given (judged on its squared angles).
 bool better_cage(const QuadStats& a, bool meets_a, const QuadStats& b, bool meets_b);

@@ -38,7 +38,7 @@ struct Layout {
   // layout did not balance with them (straighten_cusps).
   std::set<int> no_cusp;
   // Where a node whose sectors do not add up to its quarter turns costs
-  // QuadOptions::off_node_price instead of corner_node_price: (point, radius), the
+  // QuadOptions::off_node_price instead of kCornerNodePrice: (point, radius), the
   // irregular vertices an earlier cage of this layout left away from singularities.
   std::vector<std::pair<Vec3, double>> costly_nodes;
   std::vector<int> attractors;       // traced singular vertices (separatrices end on them)
@@ -116,7 +116,7 @@ double sector_angle(const Surface& s, const Layout& layout, int h_out, int h_in,
 // what their angles do (4 inside, a traced singularity's `valence`), where rounding each
 // sector alone can leave an irregular vertex (curves at 45°, 180° and 270° read 2 + 1 + 2).
 // -1 where the node is on a loop, has one curve, or its sectors' angles do not add up to a
-// whole number of quarter turns (QuadOptions::node_readings).
+// whole number of quarter turns.
 int node_quarters(const Surface& s, const Layout& layout, int h_out, int valence);
 
 }  // namespace genbrep::quad_detail

@@ -61,6 +61,20 @@ std::vector<int> shortest_open_arc(const Layout& layout, const PatchLayout& patc
                                    const std::vector<int>& arcs,
                                    const std::set<std::pair<int, int>>& passed = {});
 
+// A thin cusp patch collapses onto one curve only while on average under kCuspCollapseWidth
+// target edges wide (area over length) and its side across from the empty side is under
+// kCuspCollapseAcross target edges; a wider one squeezes the quads beside it.
+constexpr double kCuspCollapseWidth = 0.75, kCuspCollapseAcross = 1.5;
+// Cuts into a patch that is not a disk start at most this many from one stretch between
+// nodes: the middle of one long arc can lie where no cut traces, and the rounds then cycle.
+constexpr int kMiddleCutsPerStretch = 3;
+// What a node whose sectors do not add up to its quarter turns costs, per quarter turn,
+// against re-reading sectors (choose_corners' node price outside Layout::costly_nodes).
+constexpr double kCornerNodePrice = 2.0;
+// Re-reading a sector of a patch one corner off also costs this times how far the patch is
+// then from a rectangle (best_corners' side term), which the flow alone cannot weigh.
+constexpr double kCornerSideWeight = 0.5;
+
 // Σ target (length / local size, at density 1) of the arcs on side k of `patch`.
 double side_target(const std::vector<Arc>& arcs, const Patch& patch, int k);
 

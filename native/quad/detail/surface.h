@@ -50,6 +50,10 @@ struct Messages {
 // finer for tracing; vertex indices and the first child of every triangle keep their
 // index, so loops and singularities carry over unchanged. Empty (no faces) where nothing
 // needed splitting.
+// Separatrices follow mesh edges: a component is refined for tracing (at most
+// QuadOptions::max_refine_levels times) until a target cage edge spans at least this many
+// mesh edges, so that a traced curve can stay near its field line.
+constexpr double kTraceEdgesPerCageEdge = 4.0;
 struct RefinedDesign {
   TriMesh mesh;
   Partition partition;
