@@ -138,15 +138,11 @@ struct EditSites {
 template <class Take>
 void rotations_at(State& s, const EditSites& at, int q, Take& take) {
   const std::array<int, 4> c = s.quads[q];
-  const Halfedges& he = at.he;
-  auto movable = [&](int v) { return at.movable(v); };
-  auto loses = [&](int v) { return at.loses(v); };
-  auto in_focus = [&](int q) { return at.in_focus(q); };
   for (int k = 0; k < 4; ++k) {
     const int u = c[k], w = c[(k + 1) % 4];
-    if (!loses(u) || !loses(w) || (!movable(u) && !movable(w))) continue;
-    const int h = he.find(w, u);
-    if (h < 0 || (u > w && in_focus(h / 4))) continue;  // each edge once
+    if (!at.loses(u) || !at.loses(w) || (!at.movable(u) && !at.movable(w))) continue;
+    const int h = at.he.find(w, u);
+    if (h < 0 || (u > w && at.in_focus(h / 4))) continue;  // each edge once
     const int q2 = h / 4, k2 = h % 4;
     const int a = c[(k + 2) % 4], b = c[(k + 3) % 4];
     const int cc = s.quads[q2][(k2 + 2) % 4], d = s.quads[q2][(k2 + 3) % 4];
@@ -157,7 +153,7 @@ void rotations_at(State& s, const EditSites& at, int q, Take& take) {
     if (!distinct) continue;
     for (int r = 0; r < 2; ++r) {
       const int x = r == 0 ? cc : d, y = r == 0 ? a : b;
-      if (!movable(x) || !movable(y) || he.joined(x, y)) continue;
+      if (!at.movable(x) || !at.movable(y) || at.he.joined(x, y)) continue;
       Editor edit(s);
       if (r == 0) edit.set_quad(q, {cc, d, w, a}), edit.set_quad(q2, {a, b, u, cc});
       else edit.set_quad(q, {d, w, a, b}), edit.set_quad(q2, {b, u, cc, d});
@@ -173,28 +169,24 @@ void rotations_at(State& s, const EditSites& at, int q, Take& take) {
 template <class Take>
 void collapses_at(State& s, const EditSites& at, int q, Take& take) {
   const std::array<int, 4> c = s.quads[q];
-  const Halfedges& he = at.he;
-  auto quads_at = [&](int v) { return at.quads_at(v); };
-  auto movable = [&](int v) { return at.movable(v); };
-  auto loses = [&](int v) { return at.loses(v); };
   // Diagonal collapses: p0 and p2 merge (valence a + c − 2 ≤ 6), p1 and p3 keep ≥ 3 quads
   // (a shedding chain vertex ≥ 2).
   for (int k = 0; k < 2; ++k) {
     const int p0 = c[k], p1 = c[k + 1], p2 = c[k + 2], p3 = c[(k + 3) % 4];
-    if (!movable(p0) || !movable(p2) || !loses(p1) || !loses(p3)) continue;
+    if (!at.movable(p0) || !at.movable(p2) || !at.loses(p1) || !at.loses(p3)) continue;
     if (s.valence[p0] + s.valence[p2] - 2 > 6) continue;
-    if (he.joined(p0, p2)) continue;
+    if (at.he.joined(p0, p2)) continue;
     // The link condition: p0 and p2 share no neighbour but p1 and p3, and no other quad.
     std::vector<int> around0;  // p0's edge neighbours
     bool linked = false;
-    for (int r : quads_at(p0)) {
+    for (int r : at.quads_at(p0)) {
       if (r == q) continue;
       const auto& e = s.quads[r];
       linked |= std::count(e.begin(), e.end(), p2) > 0;
       for (int j = 0; j < 4; ++j)
         if (e[j] == p0) around0.push_back(e[(j + 1) % 4]), around0.push_back(e[(j + 3) % 4]);
     }
-    for (int r : quads_at(p2)) {
+    for (int r : at.quads_at(p2)) {
       if (r == q || linked) continue;
       const auto& e = s.quads[r];
       for (int j = 0; j < 4; ++j)
@@ -207,7 +199,7 @@ void collapses_at(State& s, const EditSites& at, int q, Take& take) {
     Editor edit(s);
     for (int v : {p0, p1, p2, p3}) edit.touch(v);
     edit.set_quad(q, {-1, -1, -1, -1});
-    for (int r : quads_at(p2)) {
+    for (int r : at.quads_at(p2)) {
       if (r == q) continue;
       std::array<int, 4> e = s.quads[r];
       for (int& v : e) if (v == p2) v = p0;
@@ -225,20 +217,17 @@ void collapses_at(State& s, const EditSites& at, int q, Take& take) {
 // The vertex splits of the vertices in `splittable` (edits of for_each_edit).
 template <class Take>
 void splits_at(State& s, const EditSites& at, std::vector<int> splittable, Take& take) {
-  const Halfedges& he = at.he;
-  auto quads_at = [&](int v) { return at.quads_at(v); };
-  auto movable = [&](int v) { return at.movable(v); };
   // Vertex splits: u of n ≥ 5 quads keeps m of them (2 ≤ m ≤ n − 2), a new vertex w takes
   // the others, and the quad (p, u, q, w) goes between.
   std::sort(splittable.begin(), splittable.end());
   splittable.erase(std::unique(splittable.begin(), splittable.end()), splittable.end());
   for (int u : splittable) {
     const int n = s.valence[u];
-    if (!movable(u) || s.ring[u] >= kScoreRings || n < 5 || n > kMaxSplitValence) continue;
-    if (static_cast<int>(quads_at(u).size()) != n) continue;
+    if (!at.movable(u) || s.ring[u] >= kScoreRings || n < 5 || n > kMaxSplitValence) continue;
+    if (static_cast<int>(at.quads_at(u).size()) != n) continue;
     // The fan of u in order: quad j runs from after[j] (after u) to before[j].
     std::vector<int> fan, after, before;
-    for (int r : quads_at(u))
+    for (int r : at.quads_at(u))
       for (int k = 0; k < 4; ++k)
         if (s.quads[r][k] == u) {
           fan.push_back(r);
@@ -257,7 +246,7 @@ void splits_at(State& s, const EditSites& at, std::vector<int> splittable, Take&
     for (int i = 0; i < n; ++i)
       for (int m = 2; m <= n - 2; ++m) {
         const int p = after[order[i]], pq = after[order[(i + m) % n]];
-        if (p == pq || !movable(p) || !movable(pq) || he.joined(p, pq)) continue;
+        if (p == pq || !at.movable(p) || !at.movable(pq) || at.he.joined(p, pq)) continue;
         Editor edit(s);
         const Vec3 at = s.point[u];
         Vec3 side[2] = {Vec3::Zero(), Vec3::Zero()};
