@@ -16,6 +16,7 @@
 #include <functional>
 #include <limits>
 
+#include "core/numbers.h"
 #include "compose/detail/establish.h"
 #include "compose/detail/exact.h"
 #include "mesh/mesh.h"
@@ -128,11 +129,7 @@ void measure(const TriangleMesh& mesh, ComposeReport* report) {
   report->ok = v.closed_manifold() && !report->self_intersecting && v.signed_volume > 0;
 }
 
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.2g", x);
-  return buffer;
-}
+std::string number(double x) { return format_number(x, 2); }
 
 std::string point_text(const Vec3& p) {
   char buffer[96];

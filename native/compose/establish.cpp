@@ -4,6 +4,7 @@
 #include <limits>
 #include <set>
 
+#include "core/numbers.h"
 #include "compose/compose.h"
 #include "compose/detail/establish.h"
 #include "compose/detail/exact.h"
@@ -12,11 +13,7 @@
 namespace genbrep {
 namespace {
 
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", x);
-  return buffer;
-}
+std::string number(double x) { return format_number(x); }
 
 // The local width of the gap between solids a and b near p: alternating projections
 // converge to a pair of mutually nearest points.

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "core/numbers.h"
 #include "incidence/incidence.h"
 #include "mesh/mesh.h"
 
@@ -24,11 +25,7 @@ constexpr double kClearly = 3.0;
 // 0.6 h (the median edge length).
 constexpr double kSurfaceSlack = 2.0;
 
-std::string length(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", x);
-  return text;
-}
+std::string length(double x) { return format_number(x); }
 
 struct Intrusion {
   int count = 0;

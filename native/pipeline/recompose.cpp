@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "core/numbers.h"
 #include "pipeline/pipeline.h"
 #include "pull/pull.h"
 
@@ -16,11 +17,7 @@ namespace {
 
 std::string who(const std::string& name) { return "cage '" + name + "'"; }
 
-std::string number(double x) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", x);
-  return buffer;
-}
+std::string number(double x) { return format_number(x); }
 
 }  // namespace
 

@@ -15,11 +15,11 @@
 // its patch and its node), solved exactly by GLPK's out-of-kilter algorithm on integral
 // data; it is the linear program "q_s ∈ [1, 2] per free sector, Σ(2 − q_s) = 4 per patch,
 // Σ q_s + slack = target per node, minimise Σ |angle_s − q_s · 90°| + price · |slack|",
-// whose matrix is totally unimodular. The price is corner_node_price, or off_node_price at
+// whose matrix is totally unimodular. The price is kCornerNodePrice, or off_node_price at
 // the nodes near irregular vertices an earlier cage of the layout left away from
-// singularities (Layout::costly_nodes). A sector may carry a side cost too (layout.cpp: how
-// far from a rectangle its patch would be, which a flow cannot weigh itself). (That LP
-// through GLPK's simplex took 0.14–0.73 s a round on the 6 x 6 net; the flow about 0.05 s.)
+// singularities (Layout::costly_nodes). A sector may carry a side cost too (patches.cpp: how
+// far from a rectangle its patch would be, which a flow cannot weigh itself). The flow is
+// an order of magnitude faster than the same LP through GLPK's simplex.
 // Complexity: one min-cost flow on (patches + nodes) vertices and (sectors + 2 nodes) arcs.
 #include <glpk.h>
 
@@ -31,7 +31,7 @@
 #include <memory>
 #include <vector>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/patches.h"
 
 namespace genbrep::quad_detail {
 namespace {
@@ -140,7 +140,6 @@ std::vector<int> choose_corners(const std::vector<SectorChoice>& sectors, int pa
 }
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 // How far a patch whose nodes read `quarters` is from a rectangle: Σ over its two pairs of
 // opposite sides of 2 |difference| / sum of their targets (`after`: the target of the arc
@@ -302,14 +301,14 @@ int read_corners_together(const Surface& s, const Layout& layout, const QuadOpti
       }
     // A patch one corner off: what re-reading each sector alone does to its sides (the flow
     // cannot weigh a rectangle's sides, which best_corners does: without this the joint
-    // reading left the 5 x 5 net's cage with 245 quads over 2.5x the target).
-    if (!disk || options.corner_side_weight <= 0 || std::abs(turning - 4) != 1) continue;
+    // reading leaves many quads oversized).
+    if (!disk || std::abs(turning - 4) != 1) continue;
     for (size_t i = 0; i < quarters.size(); ++i) {
       if (!sectors[first + i].free) continue;
       std::vector<int> changed = quarters;
       changed[i] = 3 - changed[i];
       sectors[first + i].side_cost =
-          options.corner_side_weight * std::max(0.0, side_imbalance(changed, after));
+          kCornerSideWeight * std::max(0.0, side_imbalance(changed, after));
     }
   }
   // What a node's sectors should add up to: a traced singularity's valence, 4 inside, and
@@ -325,7 +324,7 @@ int read_corners_together(const Surface& s, const Layout& layout, const QuadOpti
   for (const auto& [v, sum] : node_sum)
     if (layout.costly(s.point[v])) prices[v] = options.off_node_price;
   const std::vector<int> chosen =
-      choose_corners(sectors, n, target, options.corner_node_price, prices);
+      choose_corners(sectors, n, target, kCornerNodePrice, prices);
   int reread = 0;
   for (size_t i = 0; i < sectors.size(); ++i)
     if (chosen[i] != sectors[i].quarters) {

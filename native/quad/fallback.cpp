@@ -21,7 +21,7 @@
 #include <cmath>
 #include <map>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/repair.h"
 
 namespace genbrep::quad_detail {
 namespace {
@@ -31,11 +31,9 @@ using Point = Kernel::Point_3;
 using Mesh = CGAL::Surface_mesh<Point>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
-constexpr double kPi = 3.14159265358979323846;
 // A pair of triangles is merged only if its quad's corners are all within this of 90°.
 constexpr double kMaxPairDeviation = 50.0;
 
-Vec3 to_vec(const Point& p) { return Vec3(p.x(), p.y(), p.z()); }
 
 double max_corner_deviation(const Vec3 (&c)[4]) {
   double worst = 0;

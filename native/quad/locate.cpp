@@ -5,7 +5,7 @@
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/cage.h"
 
 namespace genbrep::quad_detail {
 namespace {

@@ -22,8 +22,7 @@
 // singularities can explain (rivals_of), as the cage's count does.
 // Such defects are a −1 singularity drawn as a 6 and a 3, or a 5 with a 3–5 pair beside it
 // (a dislocation: the singular vertex one edge off); one edit rarely mends them, two often
-// do (genus-36 net at h 0.12: a search of the cage found 2 of 49 with one edit, 25 with
-// two; the three-edit search took the cage's 18 left to 14). A 3 and a 5 the layout left a
+// do, three more. A 3 and a 5 the layout left a
 // few edges apart, away from any singularity (rows shifting by one where a sliver or cusp
 // collapsed), need more edits than that: sequences leaving as many unexplained and no more
 // irregular vertices that draw them nearer each other are ranked too, after those leaving
@@ -35,8 +34,7 @@
 // window) more per edit beyond three; windows searched in vain are not searched again
 // until an edit touches them (or the climb is raised), nor windows whose count finds none
 // unexplained; rivals: O(irregular) per window, their pairs sorted once and merged into
-// each step's (the genus-36 net at h 0.135, alone on the machine: quad 63 → 43 s against
-// sorting them all at each step).
+// each step's rather than sorted at each step.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -45,18 +43,19 @@
 #include <tuple>
 #include <vector>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/edit.h"
+#include "quad/detail/place_edits.h"
 
 namespace genbrep::quad_detail {
 
 namespace {
 
+using namespace place;  // State, for_each_edit, kScoreRings (detail/place_edits.h)
+
 constexpr int kCoreRings = 1;    // first edits: quads at vertices this close to the vertex
-constexpr int kScoreRings = 5;   // vertices counted; every edit's changed vertices lie here
-// (4 rings and a window of 5: sweep 321 of 3944, genus 64 297; 5 and 6: 306, 301, the
-// sweep's 15 conversions 116 -> 122 s)
-constexpr int kWindowRings = 6;  // the window: quads at vertices this close
-constexpr int kMaxSplitValence = 8;
+// The window: quads at vertices this close; one ring more than kScoreRings, so that every
+// edit's quads lie in it.
+constexpr int kWindowRings = 6;
 // An edit whose quads come out with a corner under this (or turned over) is not made.
 constexpr double kMinPlacedCorner = 5.0;
 // Improving sequences kept per window, tried best first until one settles.
@@ -65,259 +64,13 @@ constexpr size_t kKeptSequences = 6;
 constexpr double kShedAngle = 225.0 * M_PI / 180.0;
 // Sequences of three edits or more taken on by one more where none helps (the best by
 // Score among those leaving no more unexplained vertices, and as many among those leaving
-// up to PlaceSettings::climb more; PlaceSettings::max_edits). 48 conversions with 16
-// climbing instead of 64: 14 unexplained against 8, 641 s against 649.
+// up to PlaceSettings::climb more; PlaceSettings::max_edits).
 constexpr size_t kDeepPrefixes = 64;
 // Drawing pairs together (PlaceSettings::draw_pairs_together): a sequence leaving as many
 // unexplained vertices is made if it brings them, summed, at least kPairCloser reaches
-// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away (25 nets,
-// before the three-edit search's fix below: 297 → 276 with 3 and 0.25; 278 with 6 and
-// 0.25; 284 with 6 and 0.5).
+// nearer to one of opposite sign, each counted up to kPairSpreadCap reaches away.
 constexpr double kPairSpreadCap = 3.0;
 constexpr double kPairCloser = 0.25;
-
-// A window's connectivity after some edits, in local vertex ids.
-struct State {
-  std::vector<std::array<int, 4>> quads;  // quads[i][0] == -1: removed
-  std::vector<int> origin;                // per quad: the cage's quad, or -1 (added)
-  std::vector<int> valence, ring;         // per local vertex (ring: from the vertex)
-  std::vector<char> fixed;                // on a chain or a crease edge
-  std::vector<char> shed;                 // a chain vertex that may lose a quad (sheds)
-  std::vector<Vec3> point;
-  std::vector<double> reach;
-  std::vector<int> changed;               // vertices whose valence an edit changed
-};
-
-// Directed edge (a, b) → quad * 4 + k, sorted for lookups.
-struct Halfedges {
-  explicit Halfedges(const State& s) : n(static_cast<long long>(s.valence.size())) {
-    for (size_t q = 0; q < s.quads.size(); ++q)
-      if (s.quads[q][0] >= 0)
-        for (int k = 0; k < 4; ++k)
-          list.push_back({s.quads[q][k] * n + s.quads[q][(k + 1) % 4], static_cast<int>(q * 4 + k)});
-    std::sort(list.begin(), list.end());
-  }
-  int find(int a, int b) const {  // quad * 4 + k, or -1
-    const auto it = std::lower_bound(list.begin(), list.end(), std::pair<long long, int>{a * n + b, -1});
-    return it != list.end() && it->first == a * n + b ? it->second : -1;
-  }
-  bool joined(int a, int b) const { return find(a, b) >= 0 || find(b, a) >= 0; }
-  long long n;
-  std::vector<std::pair<long long, int>> list;
-};
-
-// Edits a state in place and takes them back (each edit is tried, scored and undone).
-class Editor {
- public:
-  explicit Editor(State& s)
-      : s_(s), quads_(s.quads.size()), vertices_(s.valence.size()), changed_(s.changed.size()) {}
-  void set_quad(int q, const std::array<int, 4>& c) {
-    quad_log_.push_back({q, s_.quads[q]});
-    s_.quads[q] = c;
-  }
-  void add_quad(const std::array<int, 4>& c) { s_.quads.push_back(c), s_.origin.push_back(-1); }
-  // Call before changing v's valence, point or reach.
-  void touch(int v) {
-    vertex_log_.push_back({v, s_.valence[v], s_.point[v], s_.reach[v]});
-    if (std::find(s_.changed.begin(), s_.changed.end(), v) == s_.changed.end())
-      s_.changed.push_back(v);
-  }
-  int add_vertex(int valence, int ring, const Vec3& point, double reach) {
-    const int v = static_cast<int>(s_.valence.size());
-    s_.valence.push_back(valence), s_.ring.push_back(ring), s_.fixed.push_back(0);
-    s_.shed.push_back(0);
-    s_.point.push_back(point), s_.reach.push_back(reach), s_.changed.push_back(v);
-    return v;
-  }
-  void undo() {
-    for (auto it = quad_log_.rbegin(); it != quad_log_.rend(); ++it) s_.quads[it->first] = it->second;
-    for (auto it = vertex_log_.rbegin(); it != vertex_log_.rend(); ++it) {
-      const auto& [v, valence, point, reach] = *it;
-      s_.valence[v] = valence, s_.point[v] = point, s_.reach[v] = reach;
-    }
-    s_.quads.resize(quads_), s_.origin.resize(quads_);
-    s_.valence.resize(vertices_), s_.ring.resize(vertices_), s_.fixed.resize(vertices_);
-    s_.shed.resize(vertices_);
-    s_.point.resize(vertices_), s_.reach.resize(vertices_);
-    s_.changed.resize(changed_);
-  }
-
- private:
-  State& s_;
-  size_t quads_, vertices_, changed_;
-  std::vector<std::pair<int, std::array<int, 4>>> quad_log_;
-  std::vector<std::tuple<int, int, Vec3, double>> vertex_log_;
-};
-
-// Makes every single edit of `s` on quads with a corner in `focus` in turn, calls `take`
-// on the edited state, and takes the edit back.
-template <class Take>
-void for_each_edit(State& s, const std::vector<char>& focus, Take take) {
-  const Halfedges he(s);
-  const int nq = static_cast<int>(s.quads.size());
-  // The quads at each vertex: quads_at(v) (compressed rows).
-  std::vector<int> first(s.valence.size() + 1, 0), at_list;
-  for (int q = 0; q < nq; ++q)
-    if (s.quads[q][0] >= 0)
-      for (int v : s.quads[q]) ++first[v + 1];
-  for (size_t v = 0; v + 1 < first.size(); ++v) first[v + 1] += first[v];
-  at_list.resize(first.back());
-  {
-    std::vector<int> fill(first.begin(), first.end() - 1);
-    for (int q = 0; q < nq; ++q)
-      if (s.quads[q][0] >= 0)
-        for (int v : s.quads[q]) at_list[fill[v]++] = q;
-  }
-  struct Span {
-    const int *b, *e;
-    const int* begin() const { return b; }
-    const int* end() const { return e; }
-    size_t size() const { return static_cast<size_t>(e - b); }
-  };
-  auto quads_at = [&](int v) { return Span{at_list.data() + first[v], at_list.data() + first[v + 1]}; };
-  auto in_focus = [&](int q) {
-    if (s.quads[q][0] < 0) return false;
-    for (int v : s.quads[q]) if (focus[v]) return true;
-    return false;
-  };
-  auto movable = [&](int v) { return !s.fixed[v] && s.ring[v] <= kScoreRings; };
-  // Vertices an edit takes a quad from: free ones of four or more, and chain vertices of
-  // three or more that may shed one (their place and chain edges stay).
-  auto loses = [&](int v) {
-    return movable(v) ? s.valence[v] >= 4
-                      : s.shed[v] && s.valence[v] >= 3 && s.ring[v] <= kScoreRings;
-  };
-  std::vector<int> splittable;
-  for (int q = 0; q < nq; ++q) {
-    if (!in_focus(q)) continue;
-    const std::array<int, 4> c = s.quads[q];
-    for (int v : c) splittable.push_back(v);
-    // Edge rotations: u–w between (u, w, a, b) and (w, u, c, d) becomes c–a or d–b.
-    for (int k = 0; k < 4; ++k) {
-      const int u = c[k], w = c[(k + 1) % 4];
-      if (!loses(u) || !loses(w) || (!movable(u) && !movable(w))) continue;
-      const int h = he.find(w, u);
-      if (h < 0 || (u > w && in_focus(h / 4))) continue;  // each edge once
-      const int q2 = h / 4, k2 = h % 4;
-      const int a = c[(k + 2) % 4], b = c[(k + 3) % 4];
-      const int cc = s.quads[q2][(k2 + 2) % 4], d = s.quads[q2][(k2 + 3) % 4];
-      const std::array<int, 6> hexagon = {u, cc, d, w, a, b};
-      bool distinct = true;
-      for (int i = 0; i < 6; ++i)
-        for (int j = i + 1; j < 6; ++j) distinct &= hexagon[i] != hexagon[j];
-      if (!distinct) continue;
-      for (int r = 0; r < 2; ++r) {
-        const int x = r == 0 ? cc : d, y = r == 0 ? a : b;
-        if (!movable(x) || !movable(y) || he.joined(x, y)) continue;
-        Editor edit(s);
-        if (r == 0) edit.set_quad(q, {cc, d, w, a}), edit.set_quad(q2, {a, b, u, cc});
-        else edit.set_quad(q, {d, w, a, b}), edit.set_quad(q2, {b, u, cc, d});
-        for (int v : {u, w, x, y}) edit.touch(v);
-        --s.valence[u], --s.valence[w], ++s.valence[x], ++s.valence[y];
-        take();
-        edit.undo();
-      }
-    }
-    // Diagonal collapses: p0 and p2 merge (valence a + c − 2 ≤ 6), p1 and p3 keep ≥ 3 quads
-    // (a shedding chain vertex ≥ 2).
-    for (int k = 0; k < 2; ++k) {
-      const int p0 = c[k], p1 = c[k + 1], p2 = c[k + 2], p3 = c[(k + 3) % 4];
-      if (!movable(p0) || !movable(p2) || !loses(p1) || !loses(p3)) continue;
-      if (s.valence[p0] + s.valence[p2] - 2 > 6) continue;
-      if (he.joined(p0, p2)) continue;
-      // The link condition: p0 and p2 share no neighbour but p1 and p3, and no other quad.
-      std::vector<int> around0;  // p0's edge neighbours
-      bool linked = false;
-      for (int r : quads_at(p0)) {
-        if (r == q) continue;
-        const auto& e = s.quads[r];
-        linked |= std::count(e.begin(), e.end(), p2) > 0;
-        for (int j = 0; j < 4; ++j)
-          if (e[j] == p0) around0.push_back(e[(j + 1) % 4]), around0.push_back(e[(j + 3) % 4]);
-      }
-      for (int r : quads_at(p2)) {
-        if (r == q || linked) continue;
-        const auto& e = s.quads[r];
-        for (int j = 0; j < 4; ++j)
-          if (e[j] == p2)
-            for (int n : {e[(j + 1) % 4], e[(j + 3) % 4]})
-              linked |= n != p1 && n != p3 &&
-                        std::find(around0.begin(), around0.end(), n) != around0.end();
-      }
-      if (linked) continue;
-      Editor edit(s);
-      for (int v : {p0, p1, p2, p3}) edit.touch(v);
-      edit.set_quad(q, {-1, -1, -1, -1});
-      for (int r : quads_at(p2)) {
-        if (r == q) continue;
-        std::array<int, 4> e = s.quads[r];
-        for (int& v : e) if (v == p2) v = p0;
-        edit.set_quad(r, e);
-      }
-      s.valence[p0] += s.valence[p2] - 2, s.valence[p2] = 0;
-      --s.valence[p1], --s.valence[p3];
-      s.point[p0] = 0.5 * (s.point[p0] + s.point[p2]);
-      s.reach[p0] = 0.5 * (s.reach[p0] + s.reach[p2]);
-      take();
-      edit.undo();
-    }
-  }
-  // Vertex splits: u of n ≥ 5 quads keeps m of them (2 ≤ m ≤ n − 2), a new vertex w takes
-  // the others, and the quad (p, u, q, w) goes between.
-  std::sort(splittable.begin(), splittable.end());
-  splittable.erase(std::unique(splittable.begin(), splittable.end()), splittable.end());
-  for (int u : splittable) {
-    const int n = s.valence[u];
-    if (!movable(u) || s.ring[u] >= kScoreRings || n < 5 || n > kMaxSplitValence) continue;
-    if (static_cast<int>(quads_at(u).size()) != n) continue;
-    // The fan of u in order: quad j runs from after[j] (after u) to before[j].
-    std::vector<int> fan, after, before;
-    for (int r : quads_at(u))
-      for (int k = 0; k < 4; ++k)
-        if (s.quads[r][k] == u) {
-          fan.push_back(r);
-          after.push_back(s.quads[r][(k + 1) % 4]);
-          before.push_back(s.quads[r][(k + 3) % 4]);
-        }
-    std::vector<int> order = {0};
-    while (static_cast<int>(order.size()) < n) {
-      int next = -1;
-      for (int j = 0; j < n; ++j)
-        if (after[j] == before[order.back()]) next = j;
-      if (next <= 0) break;
-      order.push_back(next);
-    }
-    if (static_cast<int>(order.size()) != n || before[order.back()] != after[order[0]]) continue;
-    for (int i = 0; i < n; ++i)
-      for (int m = 2; m <= n - 2; ++m) {
-        const int p = after[order[i]], pq = after[order[(i + m) % n]];
-        if (p == pq || !movable(p) || !movable(pq) || he.joined(p, pq)) continue;
-        Editor edit(s);
-        const Vec3 at = s.point[u];
-        Vec3 side[2] = {Vec3::Zero(), Vec3::Zero()};
-        for (int j = 0; j < n; ++j) {
-          const int r = fan[order[j]];
-          for (int k = 0; k < 4; ++k) side[((j - i + n) % n) < m ? 0 : 1] += s.point[s.quads[r][k]];
-        }
-        for (int v : {u, p, pq}) edit.touch(v);
-        const int w = edit.add_vertex(n - m + 1, s.ring[u],
-                                      at + (side[1] / (4.0 * (n - m)) - at) / 3, s.reach[u]);
-        for (int j = 0; j < n; ++j)
-          if (((j - i + n) % n) >= m) {
-            const int r = fan[order[j]];
-            std::array<int, 4> e = s.quads[r];
-            for (int& v : e) if (v == u) v = w;
-            edit.set_quad(r, e);
-          }
-        edit.add_quad({p, u, pq, w});
-        s.valence[u] = m + 1;
-        ++s.valence[p], ++s.valence[pq];
-        s.point[u] = at + (side[0] / (4.0 * m) - at) / 3;
-        take();
-        edit.undo();
-      }
-  }
-}
 
 // Unexplained vertices, then irregular ones, among the scored vertices (`scored`: the
 // window's vertices within kScoreRings that are not on a chain or may shed a quad;
@@ -511,6 +264,199 @@ bool settle(const CageChecks& checks, State& s, int rings, int sweeps, std::vect
   return true;
 }
 
+// The sequences of edits tried around one window of place_irregulars (their comments there),
+// the kKeptSequences best that leave fewer unexplained vertices than `before` (or as many,
+// drawn nearer), best first. `score_now` scores `s` as it stands.
+template <class ScoreNow>
+std::vector<std::pair<Score, State>> search_sequences(State& s, ScoreNow score_now,
+                                                      const Score& before, size_t window_vertices,
+                                                      int max_edits, int climb) {
+  std::vector<std::pair<Score, State>> kept;
+  auto keep = [&](const Score& now) {
+    const auto [off, irregular_now, apart] = now;
+    const auto [off_before, irregular_before, apart_before] = before;
+    if (off > off_before ||
+        (off == off_before &&
+         !(irregular_now <= irregular_before && apart < apart_before - kPairCloser)))
+      return;
+    keep_best(kept, now, s, kKeptSequences);
+  };
+  std::vector<char> focus(s.valence.size(), 0);
+  for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
+  const std::vector<int> start = s.valence;  // the window's valences before any edit
+  // Sequences of one or two edits; where none leaves fewer unexplained, of three whose
+  // first two leave at most `climb` more than before (each edit after the first at the
+  // vertices the edits so far changed).
+  auto first_edit = [&](auto&& then) {
+    for_each_edit(s, focus, [&] {
+      // The first edit changes an irregular vertex.
+      if (std::none_of(s.changed.begin(), s.changed.end(), [&](int v) {
+            return static_cast<size_t>(v) < window_vertices && start[v] != 4;
+          }))
+        return;
+      then();
+    });
+  };
+  auto next_edit = [&](auto&& then) {
+    std::vector<char> at_last(s.valence.size(), 0);
+    for (int v : s.changed) at_last[v] = 1;
+    for_each_edit(s, at_last, then);
+  };
+  first_edit([&] {
+    keep(score_now());
+    next_edit([&] { keep(score_now()); });
+  });
+  // Sequences that only draw a pair together do not spare the three-edit search: it finds
+  // sequences that leave fewer.
+  auto fewer = [&] {
+    return std::any_of(kept.begin(), kept.end(), [&](const auto& k) {
+      return std::get<0>(k.first) < std::get<0>(before);
+    });
+  };
+  // A sequence of three edits or more is kept if it helps, and it is among the
+  // kDeepPrefixes best to take on by one more edit (where max_edits allows) if it
+  // leaves no more unexplained than before; or among the kDeepPrefixes best of those
+  // climbing (up to `climb` more), so that they are not crowded out by the level ones,
+  // which rank before them.
+  auto keep_prefix = [&](std::vector<std::pair<Score, State>>& prefixes,
+                         std::vector<std::pair<Score, State>>& climbing) {
+    const Score now = score_now();
+    keep(now);
+    if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before))
+      keep_best(prefixes, now, s, kDeepPrefixes);
+    else if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before) + climb)
+      keep_best(climbing, now, s, kDeepPrefixes);
+  };
+  std::vector<std::pair<Score, State>> prefixes, climbing;
+  if (max_edits >= 3 && !fewer())
+    first_edit([&] {
+      next_edit([&] {
+        if (std::get<0>(score_now()) <= std::get<0>(before) + climb)
+          next_edit([&] { keep_prefix(prefixes, climbing); });
+      });
+    });
+  // Where those do not help either, one edit more at a time after each of the
+  // prefixes, up to max_edits.
+  for (int edits = 4;
+       edits <= max_edits && !fewer() && (!prefixes.empty() || !climbing.empty()); ++edits) {
+    std::vector<std::pair<Score, State>> longer, longer_climbing;
+    for (auto* pool : {&prefixes, &climbing})
+      for (auto& prefix : *pool) {
+        std::swap(s, prefix.second);
+        next_edit([&] { keep_prefix(longer, longer_climbing); });
+        std::swap(s, prefix.second);
+      }
+    prefixes = std::move(longer);
+    climbing = std::move(longer_climbing);
+  }
+  return kept;
+}
+
+// The cage as a round of place_irregulars edited it (`points`, `quads`: removed quads have
+// corner -1), with removed quads and vertices no quad or chain uses dropped. Returns, per
+// vertex of the new cage, whether its window was searched in vain and no edit touched it.
+std::vector<char> compact(QuadCage& cage, const std::vector<Vec3>& points,
+                          const std::vector<std::array<int, 4>>& quads,
+                          const std::vector<std::pair<int, std::vector<int>>>& searched,
+                          const std::vector<char>& locked) {
+  std::vector<int> used(points.size(), 0);
+  for (const auto& c : quads)
+    if (c[0] >= 0) for (int v : c) used[v] = 1;
+  for (const auto& chain : cage.boundary_chains)
+    for (int v : chain) used[v] = 1;
+  std::vector<int> id(points.size(), -1);
+  int kept = 0;
+  for (size_t v = 0; v < points.size(); ++v)
+    if (used[v]) id[v] = kept++;
+  Vertices vertices(kept, 3);
+  for (size_t v = 0; v < points.size(); ++v)
+    if (id[v] >= 0) vertices.row(id[v]) = points[v].transpose();
+  const long live = std::count_if(quads.begin(), quads.end(), [](const auto& c) { return c[0] >= 0; });
+  Quads out(live, 4);
+  for (long q = 0, r = 0; q < static_cast<long>(quads.size()); ++q) {
+    if (quads[q][0] < 0) continue;
+    for (int k = 0; k < 4; ++k) out(r, k) = id[quads[q][k]];
+    ++r;
+  }
+  for (auto& chain : cage.boundary_chains)
+    for (int& v : chain) v = id[v];
+  for (auto& e : cage.crease_edges) e = {id[e[0]], id[e[1]]};
+  cage.vertices = std::move(vertices);
+  cage.quads = std::move(out);
+  std::vector<char> still_vain(kept, 0);
+  for (const auto& [vertex, window] : searched)
+    if (std::none_of(window.begin(), window.end(), [&](int v) { return locked[v]; }))
+      still_vain[id[vertex]] = 1;
+  return still_vain;
+}
+
+// A window's connectivity in local vertex ids (`local`: cage vertex → local id, numbered as
+// the window's quads reach them), with each vertex's valence, ring, point and reach.
+template <class ReachOf>
+State window_state(const std::set<int>& window_quads, const CageIncidence& incidence,
+                   const std::vector<int>& ring, const std::vector<std::array<int, 4>>& quads,
+                   const std::vector<char>& fixed, const std::vector<char>& shed,
+                   const std::vector<Vec3>& points, ReachOf& reach_of, std::map<int, int>* out) {
+  State s;
+  std::map<int, int>& local = *out;
+  auto local_id = [&](int v) {
+    auto [it, added] = local.emplace(v, static_cast<int>(s.valence.size()));
+    if (added) {
+      s.valence.push_back(static_cast<int>(incidence.quads_of[v].size()));
+      s.ring.push_back(ring[v] >= 0 ? ring[v] : kWindowRings + 1);
+      s.fixed.push_back(fixed[v]);
+      s.shed.push_back(shed[v]);
+      s.point.push_back(points[v]);
+      s.reach.push_back(reach_of(v));
+    }
+    return it->second;
+  };
+  for (int q : window_quads) {
+    std::array<int, 4> c;
+    for (int k = 0; k < 4; ++k) c[k] = local_id(quads[q][k]);
+    s.quads.push_back(c);
+    s.origin.push_back(q);
+  }
+  return s;
+}
+
+// A chosen sequence's state `t` written into the cage as edited this round: quads rewritten,
+// added or removed; new and moved vertices (`moved`, local ids).
+void apply_sequence(const State& t, const std::vector<int>& global, const std::vector<int>& moved,
+                    std::vector<Vec3>& points, std::vector<std::array<int, 4>>& quads) {
+  std::vector<int> to_global = global;
+  for (size_t l = global.size(); l < t.valence.size(); ++l) {
+    to_global.push_back(static_cast<int>(points.size()));
+    points.push_back(t.point[l]);
+  }
+  for (int v : moved) points[to_global[v]] = t.point[v];
+  for (size_t q = 0; q < t.quads.size(); ++q) {
+    std::array<int, 4> c = {-1, -1, -1, -1};
+    if (t.quads[q][0] >= 0)
+      for (int k = 0; k < 4; ++k) c[k] = to_global[t.quads[q][k]];
+    if (t.origin[q] >= 0) quads[t.origin[q]] = c;
+    else quads.push_back(c);
+  }
+}
+
+// How far from `centre` a singularity can explain a vertex of the window `s`.
+double window_extent(const State& s, const Vec3& centre) {
+  double extent = 0;
+  for (size_t l = 0; l < s.point.size(); ++l)
+    extent = std::max(extent, (s.point[l] - centre).norm() + s.reach[l]);
+  return extent;
+}
+
+// The singularities within `extent` of `centre` (into *near), and per singularity its index
+// there (-1: not near).
+void singularities_within(const std::vector<SingularPoint>& singular, const Vec3& centre,
+                          double extent, std::vector<SingularPoint>* near,
+                          std::vector<int>* near_id) {
+  for (size_t i = 0; i < singular.size(); ++i)
+    if ((singular[i].point - centre).norm() <= extent)
+      (*near_id)[i] = static_cast<int>(near->size()), near->push_back(singular[i]);
+}
+
 }  // namespace
 
 int chain_vertices_to_shed(const QuadCage& cage) {
@@ -583,25 +529,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         for (int v : quads[q]) free &= !locked[v];
       State s;
       std::map<int, int> local;
-      auto local_id = [&](int v) {
-        auto [it, added] = local.emplace(v, static_cast<int>(s.valence.size()));
-        if (added) {
-          s.valence.push_back(static_cast<int>(incidence.quads_of[v].size()));
-          s.ring.push_back(ring[v] >= 0 ? ring[v] : kWindowRings + 1);
-          s.fixed.push_back(fixed[v]);
-          s.shed.push_back(shed[v]);
-          s.point.push_back(points[v]);
-          s.reach.push_back(reach_of(v));
-        }
-        return it->second;
-      };
       if (free)
-        for (int q : window_quads) {
-          std::array<int, 4> c;
-          for (int k = 0; k < 4; ++k) c[k] = local_id(quads[q][k]);
-          s.quads.push_back(c);
-          s.origin.push_back(q);
-        }
+        s = window_state(window_quads, incidence, ring, quads, fixed, shed, points, reach_of, &local);
       std::vector<int> global(local.size());
       for (const auto& [g, l] : local) global[l] = g;
       for (int v : reached) ring[v] = -1;
@@ -613,14 +542,10 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       const size_t window_vertices = s.valence.size();
       // The singularities that can explain a vertex of the window.
       const Vec3 centre = cage.vertices.row(start_vertex).transpose();
-      double extent = 0;
-      for (size_t l = 0; l < s.point.size(); ++l)
-        extent = std::max(extent, (s.point[l] - centre).norm() + s.reach[l]);
+      const double extent = window_extent(s, centre);
       std::vector<SingularPoint> near;
       std::vector<int> near_id(singular.size(), -1);
-      for (size_t i = 0; i < singular.size(); ++i)
-        if ((singular[i].point - centre).norm() <= extent)
-          near_id[i] = static_cast<int>(near.size()), near.push_back(singular[i]);
+      singularities_within(singular, centre, extent, &near, &near_id);
       Rivals rivals;
       if (settings.rivals) {
         std::vector<char> is_scored(s.valence.size(), 0);
@@ -654,84 +579,8 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         searched.push_back({start_vertex, std::move(global)});
         continue;
       }
-      std::vector<std::pair<Score, State>> kept;
-      auto keep = [&](const Score& now) {
-        const auto [off, irregular_now, apart] = now;
-        const auto [off_before, irregular_before, apart_before] = before;
-        if (off > off_before ||
-            (off == off_before &&
-             !(irregular_now <= irregular_before && apart < apart_before - kPairCloser)))
-          return;
-        keep_best(kept, now, s, kKeptSequences);
-      };
-      std::vector<char> focus(s.valence.size(), 0);
-      for (size_t l = 0; l < focus.size(); ++l) focus[l] = s.ring[l] <= kCoreRings;
-      const std::vector<int> start = s.valence;  // the window's valences before any edit
-      // Sequences of one or two edits; where none leaves fewer unexplained, of three whose
-      // first two leave at most `climb` more than before (each edit after the first at the
-      // vertices the edits so far changed).
-      auto first_edit = [&](auto&& then) {
-        for_each_edit(s, focus, [&] {
-          // The first edit changes an irregular vertex.
-          if (std::none_of(s.changed.begin(), s.changed.end(), [&](int v) {
-                return static_cast<size_t>(v) < window_vertices && start[v] != 4;
-              }))
-            return;
-          then();
-        });
-      };
-      auto next_edit = [&](auto&& then) {
-        std::vector<char> at_last(s.valence.size(), 0);
-        for (int v : s.changed) at_last[v] = 1;
-        for_each_edit(s, at_last, then);
-      };
-      first_edit([&] {
-        keep(score_now());
-        next_edit([&] { keep(score_now()); });
-      });
-      // Sequences that only draw a pair together do not spare the three-edit search (when
-      // they did, the 25 nets had 276 unexplained vertices instead of 245).
-      auto fewer = [&] {
-        return std::any_of(kept.begin(), kept.end(), [&](const auto& k) {
-          return std::get<0>(k.first) < std::get<0>(before);
-        });
-      };
-      // A sequence of three edits or more is kept if it helps, and it is among the
-      // kDeepPrefixes best to take on by one more edit (where max_edits allows) if it
-      // leaves no more unexplained than before; or among the kDeepPrefixes best of those
-      // climbing (up to `climb` more), so that they are not crowded out by the level ones,
-      // which rank before them.
-      auto keep_prefix = [&](std::vector<std::pair<Score, State>>& prefixes,
-                             std::vector<std::pair<Score, State>>& climbing) {
-        const Score now = score_now();
-        keep(now);
-        if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before))
-          keep_best(prefixes, now, s, kDeepPrefixes);
-        else if (max_edits > 3 && std::get<0>(now) <= std::get<0>(before) + climb)
-          keep_best(climbing, now, s, kDeepPrefixes);
-      };
-      std::vector<std::pair<Score, State>> prefixes, climbing;
-      if (max_edits >= 3 && !fewer())
-        first_edit([&] {
-          next_edit([&] {
-            if (std::get<0>(score_now()) <= std::get<0>(before) + climb)
-              next_edit([&] { keep_prefix(prefixes, climbing); });
-          });
-        });
-      // Where those do not help either, one edit more at a time after each of the
-      // prefixes, up to max_edits.
-      for (int edits = 4;
-           edits <= max_edits && !fewer() && (!prefixes.empty() || !climbing.empty()); ++edits) {
-        std::vector<std::pair<Score, State>> longer, longer_climbing;
-        for (auto* pool : {&prefixes, &climbing})
-          for (auto& prefix : *pool) {
-            std::swap(s, prefix.second);
-            next_edit([&] { keep_prefix(longer, longer_climbing); });
-            std::swap(s, prefix.second);
-          }
-        prefixes = std::move(longer);
-        climbing = std::move(longer_climbing);
-      }
+      std::vector<std::pair<Score, State>> kept =
+          search_sequences(s, score_now, before, window_vertices, max_edits, climb);
       // The first whose quads, evened out around the changed vertices, are not squeezed or
       // turned over.
       State* chosen = nullptr;
@@ -746,20 +595,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         continue;
       }
       const State& t = *chosen;
-      // Into the cage as edited: quads rewritten, added or removed; new and moved vertices.
-      std::vector<int> to_global = global;
-      for (size_t l = global.size(); l < t.valence.size(); ++l) {
-        to_global.push_back(static_cast<int>(points.size()));
-        points.push_back(t.point[l]);
-      }
-      for (int v : moved) points[to_global[v]] = t.point[v];
-      for (size_t q = 0; q < t.quads.size(); ++q) {
-        std::array<int, 4> c = {-1, -1, -1, -1};
-        if (t.quads[q][0] >= 0)
-          for (int k = 0; k < 4; ++k) c[k] = to_global[t.quads[q][k]];
-        if (t.origin[q] >= 0) quads[t.origin[q]] = c;
-        else quads.push_back(c);
-      }
+      apply_sequence(t, global, moved, points, quads);
       for (int q : window_quads)
         for (int k = 0; k < 4; ++k) locked[cage.quads(q, k)] = 1;
       ++now;
@@ -773,35 +609,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     if (!now) break;
     total += now;
     // Compacted: removed quads and vertices no quad or chain uses dropped.
-    std::vector<int> used(points.size(), 0);
-    for (const auto& c : quads)
-      if (c[0] >= 0) for (int v : c) used[v] = 1;
-    for (const auto& chain : cage.boundary_chains)
-      for (int v : chain) used[v] = 1;
-    std::vector<int> id(points.size(), -1);
-    int kept = 0;
-    for (size_t v = 0; v < points.size(); ++v)
-      if (used[v]) id[v] = kept++;
-    Vertices vertices(kept, 3);
-    for (size_t v = 0; v < points.size(); ++v)
-      if (id[v] >= 0) vertices.row(id[v]) = points[v].transpose();
-    const long live = std::count_if(quads.begin(), quads.end(), [](const auto& c) { return c[0] >= 0; });
-    Quads out(live, 4);
-    for (long q = 0, r = 0; q < static_cast<long>(quads.size()); ++q) {
-      if (quads[q][0] < 0) continue;
-      for (int k = 0; k < 4; ++k) out(r, k) = id[quads[q][k]];
-      ++r;
-    }
-    for (auto& chain : cage.boundary_chains)
-      for (int& v : chain) v = id[v];
-    for (auto& e : cage.crease_edges) e = {id[e[0]], id[e[1]]};
-    cage.vertices = std::move(vertices);
-    cage.quads = std::move(out);
-    std::vector<char> still_vain(kept, 0);
-    for (const auto& [vertex, window] : searched)
-      if (std::none_of(window.begin(), window.end(), [&](int v) { return locked[v]; }))
-        still_vain[id[vertex]] = 1;
-    vain = std::move(still_vain);
+    vain = compact(cage, points, quads, searched, locked);
   }
   return total;
 }

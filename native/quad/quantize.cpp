@@ -11,16 +11,14 @@
 // Why not a min-cost flow: around singularities a T-mesh has side cycles of odd twist
 // (Lyon et al. 2021), where an arc enters both of its constraints with the same sign; the
 // constraint matrix is then that of a bidirected graph, not a network, and rounding or
-// local search can leave it infeasible (the layouts of the boss and components fixtures
-// did). The integer program has no such case. Its LP relaxation is half-integral and the
+// local search can leave it infeasible. The integer program has no such case. Its LP relaxation is half-integral and the
 // constraints are homogeneous, so an integer solution exists whenever a real one does
 // (twice a half-integral solution), and branch-and-cut finds the nearest.
-// Complexity: arcs · segments columns (segments ≈ 8 + 2 log t); the fixtures' layouts (≤ a
-// few hundred arcs) solve in milliseconds, a genus-64 net's (6–20k arcs) took 10 s or more
-// to prove optimality. The search stops once its solution is provably within
-// QuadOptions::quantize_gap of the optimum (a genus-64 net's: 2–4 s, 40–140 nodes), which
-// depends on the problem only, so the counts are the same on every run; a time limit
-// (QuadOptions::quantize_seconds, 10 s) stays as a last resort and keeps the best solution
+// Complexity: arcs · segments columns (segments ≈ 8 + 2 log t); a few hundred arcs solve in
+// milliseconds, thousands can take long to prove optimal. The search stops once its
+// solution is provably within QuadOptions::quantize_gap of the optimum, which depends on
+// the problem only, so the counts are the same on every run; a time limit
+// (QuadOptions::quantize_seconds) stays as a last resort and keeps the best solution
 // found — only then does the result depend on the machine.
 #include <glpk.h>
 
@@ -31,7 +29,7 @@
 #include <memory>
 #include <string>
 
-#include "quad/detail/layout.h"
+#include "quad/detail/patches.h"
 
 namespace genbrep::quad_detail {
 
@@ -80,27 +78,59 @@ std::vector<SideRow> side_rows(const PatchLayout& layout) {
   return rows;
 }
 
-// One exact solve with per-arc lower bounds (0 or 1).
-bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<int>& lower,
-           const std::vector<int>& sides_of, std::string* failure) {
-  const int arcs = static_cast<int>(layout.arcs.size());
-  const std::vector<SideRow> rows = side_rows(layout);
-  glp_term_out(GLP_OFF);
-  std::unique_ptr<glp_prob, ProblemDeleter> problem(glp_create_prob());
-  glp_prob* lp = problem.get();
-  glp_set_obj_dir(lp, GLP_MIN);
-  // Arcs that must be equal (a row n_a − n_b = 0: two opposite sides of one arc each, the
-  // usual case along a strip of patches) are one variable, the strip's count: union-find
-  // over such rows, repeated while merging turns more rows into such pairs.
-  std::vector<int> parent(arcs);
-  for (int a = 0; a < arcs; ++a) parent[a] = a;
-  std::function<int(int)> find = [&](int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); };
-  auto by_class = [&](const std::map<int, int>& coefficients) {
+// The integer program of one solve: a variable per class of arcs that must be equal, its
+// count written as segment columns around a base, and the rows over them.
+class CountProgram {
+ public:
+  CountProgram(PatchLayout& layout, const QuadOptions& options, const std::vector<SideRow>& rows)
+      : layout(layout), options(options), rows(rows), arcs(static_cast<int>(layout.arcs.size())),
+        problem(glp_create_prob()), lp(problem.get()), parent(arcs), segments(arcs), base(arcs, 0) {
+    glp_set_obj_dir(lp, GLP_MIN);
+    for (int a = 0; a < arcs; ++a) parent[a] = a;
+  }
+  void merge_equal_arcs();
+  void add_count_columns(const std::vector<int>& lower);
+  void add_side_rows();
+  void add_width_rows();
+  void add_loop_rows(const std::vector<int>& lower, const std::vector<int>& sides_of);
+  bool solve(std::string* failure);
+
+ private:
+  int find(int a) { return parent[a] == a ? a : parent[a] = find(parent[a]); }
+  std::map<int, int> by_class(const std::map<int, int>& coefficients) {
     std::map<int, int> out;
     for (auto& [a, c] : coefficients) out[find(a)] += c;
     for (auto it = out.begin(); it != out.end();) it = it->second ? std::next(it) : out.erase(it);
     return out;
-  };
+  }
+  // Σ c·n over the given arcs as a row over segment columns; returns Σ c·b (to move right).
+  double add_counts(int row, const std::map<int, int>& coefficients) {
+    double constant = 0;
+    for (auto& [v, c] : by_class(coefficients)) {
+      constant += c * base[v];
+      for (const Segment& g : segments[v]) ia.push_back(row), ja.push_back(g.column), ar.push_back(c * g.sign);
+    }
+    return constant;
+  }
+
+  PatchLayout& layout;
+  const QuadOptions& options;
+  const std::vector<SideRow>& rows;
+  const int arcs;
+  std::unique_ptr<glp_prob, ProblemDeleter> problem;
+  glp_prob* lp;
+  // Arcs that must be equal (a row n_a − n_b = 0: two opposite sides of one arc each, the
+  // usual case along a strip of patches) are one variable, the strip's count: union-find
+  // over such rows, repeated while merging turns more rows into such pairs.
+  std::vector<int> parent;
+  struct Segment { int column; double sign; };
+  std::vector<std::vector<Segment>> segments;  // per variable
+  std::vector<int> base;                       // per variable
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0};
+};
+
+void CountProgram::merge_equal_arcs() {
   for (bool merged = true; merged;) {
     merged = false;
     for (const SideRow& row : rows) {
@@ -111,17 +141,17 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
       }
     }
   }
+}
+
+void CountProgram::add_count_columns(const std::vector<int>& lower) {
   // Per variable (a class of equal arcs), its count n = b + Σ up − Σ down around the
   // integer b that minimises the members' summed cost, in integer segments priced at the
   // cost's increments: unit segments within kExact of b, then segments doubling in width
   // (priced at the cost's chord, above the convex cost in between), so that a long arc
   // needs few columns. The counts are substituted into the rows: no column or row per count.
   constexpr int kExact = 4;
-  struct Segment { int column; double sign; };
   std::vector<std::vector<int>> members(arcs);
   for (int a = 0; a < arcs; ++a) members[find(a)].push_back(a);
-  std::vector<std::vector<Segment>> segments(arcs);
-  std::vector<int> base(arcs, 0);
   auto target = [&](int a) { return std::max(layout.arcs[a].target * options.density, 1e-3); };
   for (int v = 0; v < arcs; ++v) {
     if (members[v].empty()) continue;
@@ -159,23 +189,18 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
     add_segments(upper, 1.0);
     add_segments(low, -1.0);
   }
-  std::vector<int> ia{0}, ja{0};
-  std::vector<double> ar{0};
-  // Σ c·n over the given arcs as a row over segment columns; returns Σ c·b (to move right).
-  auto add_counts = [&](int row, const std::map<int, int>& coefficients) {
-    double constant = 0;
-    for (auto& [v, c] : by_class(coefficients)) {
-      constant += c * base[v];
-      for (const Segment& g : segments[v]) ia.push_back(row), ja.push_back(g.column), ar.push_back(c * g.sign);
-    }
-    return constant;
-  };
+}
+
+void CountProgram::add_side_rows() {
   for (const SideRow& side_row : rows) {
     if (by_class(side_row.coefficients).empty()) continue;  // holds by the merging
     const int row = glp_add_rows(lp, 1);
     const double constant = add_counts(row, side_row.coefficients);
     glp_set_row_bnds(lp, row, GLP_FX, -constant, -constant);
   }
+}
+
+void CountProgram::add_width_rows() {
   // A patch at least one cage edge wide across a pair of sides should keep a row of quads
   // there even when those sides are short arcs (their targets say nothing about the
   // patch's width in between): Σ(side) + s ≥ 1, the slack s ∈ [0, 1] priced at the
@@ -200,11 +225,12 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
       glp_set_obj_coef(lp, slack, width);
       ia.push_back(row), ja.push_back(slack), ar.push_back(1.0);
     }
+}
+
+void CountProgram::add_loop_rows(const std::vector<int>& lower, const std::vector<int>& sides_of) {
   // A patch on a loop keeps at least one cage edge on each side that could vanish (every
   // arc of it free to be 0): its collapse would glue the loop's chain onto the patch's
-  // other sides. Rows Σ(side) ≥ 1, so one solve finds the nearest counts (was: a lower
-  // bound of 1 on the vanished side's longest arc and the program solved again, 1.2 s a
-  // time on the 6 x 6 net).
+  // other sides. Rows Σ(side) ≥ 1, so one solve finds the nearest counts.
   for (const Patch& patch : layout.patches) {
     if (!on_loop(patch, sides_of)) continue;
     for (const auto& side : patch.sides) {
@@ -217,6 +243,9 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
       glp_set_row_bnds(lp, row, GLP_LO, 1 - constant, 0);
     }
   }
+}
+
+bool CountProgram::solve(std::string* failure) {
   glp_load_matrix(lp, static_cast<int>(ia.size()) - 1, ia.data(), ja.data(), ar.data());
   glp_iocp parameters;
   glp_init_iocp(&parameters);
@@ -253,6 +282,20 @@ bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<in
     layout.arcs[a].count = static_cast<int>(std::lround(n));
   }
   return true;
+}
+
+// One exact solve with per-arc lower bounds (0 or 1).
+bool solve(PatchLayout& layout, const QuadOptions& options, const std::vector<int>& lower,
+           const std::vector<int>& sides_of, std::string* failure) {
+  const std::vector<SideRow> rows = side_rows(layout);
+  glp_term_out(GLP_OFF);
+  CountProgram program(layout, options, rows);
+  program.merge_equal_arcs();
+  program.add_count_columns(lower);
+  program.add_side_rows();
+  program.add_width_rows();
+  program.add_loop_rows(lower, sides_of);
+  return program.solve(failure);
 }
 
 }  // namespace

@@ -9,9 +9,8 @@
 // triangles are split (each split adds an edge at the singular vertex) until it has two
 // edges per separatrix: a separatrix leaves along one mesh edge, midpoint splits keep
 // every old vertex's valence, and a level-set vertex has about six edges, so a valence-5
-// singularity's five directions met fewer distinct edges than separatrices (the lattice:
-// 12 separatrices could not leave, one singularity read a corner short and became a
-// valence-3 vertex beside a valence-7 one; the genus-9 net: 11). Then every edge with the
+// singularity's five directions can meet fewer distinct edges than separatrices, and a
+// separatrix that cannot leave leaves an irregular vertex. Then every edge with the
 // component on both sides is split at its midpoint, `levels` times. A triangle with three
 // split edges becomes four, with two becomes three (the quadrilateral left cut along its
 // shorter diagonal), with one becomes two. Edges on the component's loops and elsewhere
@@ -23,13 +22,13 @@
 // Singularities stay on their vertices (the field is constant on a parent's children, so
 // no new ones arise). The surface is the same point set: midpoints of flat triangles.
 // Complexity: O(F) per level; each level multiplies the component's triangles by about 4
-// (the splits round singular vertices add about a tenth on the nets).
+// (the splits round singular vertices add little).
 #include <array>
 #include <map>
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "quad/detail/layout.h"
+#include "quad/detail/surface.h"
 
 namespace genbrep::quad_detail {
 

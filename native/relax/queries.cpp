@@ -8,6 +8,7 @@
 
 #include <algorithm>
 
+#include "core/numbers.h"
 #include "core/error.h"
 #include "relax/detail/relax_detail.h"
 
@@ -24,7 +25,6 @@ using SegmentTree = CGAL::AABB_tree<CGAL::AABB_traits<
     Kernel, CGAL::AABB_segment_primitive<Kernel, std::vector<Segment3>::const_iterator>>>;
 
 Point to_point(const Vec3& p) { return Point(p.x(), p.y(), p.z()); }
-Vec3 to_vec(const Point& p) { return Vec3(p.x(), p.y(), p.z()); }
 
 // A triangle without area relative to its size: its closest points are undefined, and
 // its edges are covered by its neighbours' in a closed mesh, so trees leave it out.

@@ -4,12 +4,12 @@
 #include <complex>
 #include <vector>
 
+#include "core/numbers.h"
 #include "field/field.h"
 
 namespace genbrep::field_detail {
 
 using Complex = std::complex<double>;
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kQuarter = kPi / 2;
 
 // An orthonormal frame per triangle: x along its first edge (projected), y = n × x.
