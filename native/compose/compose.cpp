@@ -281,6 +281,18 @@ void finish(const ExactMesh& exact, const SolidSet& solids, const std::vector<de
   if (report.self_intersecting) report.diagnostics.push_back(intersecting_pairs(out->mesh, solids));
 }
 
+// `contact` took a lower tier because of `why` (the higher tier's diagnostics): its
+// fallback reason is `reason` with the first of them and `tail`; its diagnostics start with
+// "organic component N: <reason>, composed from <what>" and `why`, indented.
+void fell_back(ComponentContact* contact, const Diagnostics& why, const std::string& reason, const std::string& tail,
+               const std::string& what) {
+  contact->fallback = reason + (why.empty() ? std::string() : " (" + why.front() + ")") + tail;
+  Diagnostics lines{"organic component " + std::to_string(contact->component) + ": " + reason +
+                    ", composed from " + what};
+  for (const auto& w : why) lines.push_back("  cage: " + w);
+  contact->diagnostics.insert(contact->diagnostics.begin(), lines.begin(), lines.end());
+}
+
 }  // namespace
 
 std::vector<std::string> fallbacks(const Composed& composed) {
@@ -369,16 +381,8 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
             },
             component, "extended cage", &cell);
         if (extended.established) {
-          extended.fallback = "its cage as fitted could not be pulled into the solids" +
-                              (why.empty() ? std::string() : " (" + why.front() + ")") +
-                              "; extended into them by a row of quads";
-          extended.diagnostics.insert(extended.diagnostics.begin(),
-                                      "organic component " + std::to_string(component) +
-                                          ": its cage as fitted could not be pulled into the solids, composed "
-                                          "from the cage extended into them");
-          for (size_t k = 0; k < why.size(); ++k) {
-            extended.diagnostics.insert(extended.diagnostics.begin() + 1 + static_cast<long>(k), "  cage: " + why[k]);
-          }
+          fell_back(&extended, why, "its cage as fitted could not be pulled into the solids",
+                    "; extended into them by a row of quads", "the cage extended into them");
           contact = std::move(extended);
         } else {
           for (const auto& d : extended.diagnostics) contact.diagnostics.push_back(d);
@@ -387,15 +391,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
       if (!contact.established && has_sheet) {
         Diagnostics why = contact.diagnostics;
         contact = attempt(region, component, "design region", &cell);
-        contact.fallback = "its cage could not be pulled into the solids" +
-                           (why.empty() ? std::string() : " (" + why.front() + ")");
-        contact.diagnostics.insert(contact.diagnostics.begin(),
-                                   "organic component " + std::to_string(component) +
-                                       ": its cage could not be pulled into the solids, composed from "
-                                       "the design region instead");
-        for (size_t k = 0; k < why.size(); ++k) {
-          contact.diagnostics.insert(contact.diagnostics.begin() + 1 + static_cast<long>(k), "  cage: " + why[k]);
-        }
+        fell_back(&contact, why, "its cage could not be pulled into the solids", "", "the design region instead");
       }
     } else {
       contact = attempt(region, component, "design region", &cell);
