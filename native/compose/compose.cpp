@@ -27,23 +27,12 @@ namespace {
 namespace PMP = CGAL::Polygon_mesh_processing;
 using detail::ExactMesh;
 using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
-using InexactMesh = CGAL::Surface_mesh<Inexact::Point_3>;
+using detail::InexactMesh;
+using detail::to_inexact;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Inexact, CGAL::AABB_face_graph_triangle_primitive<InexactMesh>>>;
 
 constexpr const char* kStage = "compose";
 
-InexactMesh to_inexact(const TriangleMesh& mesh) {
-  InexactMesh out;
-  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
-    out.add_vertex(Inexact::Point_3(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)));
-  }
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t) {
-    out.add_face(InexactMesh::Vertex_index(static_cast<unsigned>(mesh.triangles(t, 0))),
-                 InexactMesh::Vertex_index(static_cast<unsigned>(mesh.triangles(t, 1))),
-                 InexactMesh::Vertex_index(static_cast<unsigned>(mesh.triangles(t, 2))));
-  }
-  return out;
-}
 
 // The running Boolean G. `empty` until the first operand: ∅ ∪ X = X, ∅ \ X = ∅. Every
 // operand is checked against CGAL's preconditions first (operand.cpp), unless `checked`

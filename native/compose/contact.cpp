@@ -118,15 +118,7 @@ ContactCut cut_at_contact(const OrganicSheet& pulled, const ExactMesh& solid_uni
   // The sheet's points are doubles: its self-intersection test (predicates only) runs in
   // the filtered inexact kernel, exact all the same and about twice as fast as on the lazy
   // exact copy. Faces are added in the same order, so their indices match.
-  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
-  CGAL::Surface_mesh<Inexact::Point_3> plain;
-  for (Eigen::Index v = 0; v < pulled.mesh.vertices.rows(); ++v)
-    plain.add_vertex(Inexact::Point_3(pulled.mesh.vertices(v, 0), pulled.mesh.vertices(v, 1),
-                                      pulled.mesh.vertices(v, 2)));
-  for (Eigen::Index t = 0; t < pulled.mesh.triangles.rows(); ++t)
-    plain.add_face(VertexIndex(static_cast<unsigned>(pulled.mesh.triangles(t, 0))),
-                   VertexIndex(static_cast<unsigned>(pulled.mesh.triangles(t, 1))),
-                   VertexIndex(static_cast<unsigned>(pulled.mesh.triangles(t, 2))));
+  const InexactMesh plain = to_inexact(pulled.mesh);
   std::vector<std::pair<FaceIndex, FaceIndex>> crossing;
   PMP::self_intersections(plain, std::back_inserter(crossing));
   if (!crossing.empty()) {

@@ -11,8 +11,6 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-
 #include <cmath>
 #include <optional>
 
@@ -22,9 +20,20 @@ namespace genbrep::detail {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 
+InexactMesh to_inexact(const TriangleMesh& mesh) {
+  InexactMesh out;
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+    out.add_vertex(InexactMesh::Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)));
+  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
+    out.add_face(InexactMesh::Vertex_index(static_cast<unsigned>(mesh.triangles(t, 0))),
+                 InexactMesh::Vertex_index(static_cast<unsigned>(mesh.triangles(t, 1))),
+                 InexactMesh::Vertex_index(static_cast<unsigned>(mesh.triangles(t, 2))));
+  return out;
+}
+
 namespace {
 
-using Plain = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
+using Plain = InexactMesh;
 
 // `mesh` with the same combinatorics in the double kernel when every point is exactly a
 // double (input solids, pulled cage tessellations), else nothing. Its predicates are exact

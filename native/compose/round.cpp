@@ -76,21 +76,8 @@ Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
 
 namespace {
 
-using Plain = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
-
-Plain to_plain(const TriangleMesh& mesh) {
-  Plain m;
-  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
-    m.add_vertex(Plain::Point(mesh.vertices(v, 0), mesh.vertices(v, 1), mesh.vertices(v, 2)));
-  for (Eigen::Index t = 0; t < mesh.triangles.rows(); ++t)
-    m.add_face(CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 0))),
-               CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 1))),
-               CGAL::SM_Vertex_index(static_cast<unsigned>(mesh.triangles(t, 2))));
-  return m;
-}
-
 bool crosses_itself(const TriangleMesh& mesh) {
-  return CGAL::Polygon_mesh_processing::does_self_intersect(to_plain(mesh));
+  return CGAL::Polygon_mesh_processing::does_self_intersect(to_inexact(mesh));
 }
 
 // CGAL's local repair of the faces that cross: removes them and a few rings around them
@@ -99,7 +86,7 @@ bool crosses_itself(const TriangleMesh& mesh) {
 // envelope). Replaces out->mesh when the result is closed and the change local.
 void repair_locally(Rounded* out, double envelope) {
   namespace PMP = CGAL::Polygon_mesh_processing;
-  Plain m = to_plain(out->mesh);
+  InexactMesh m = to_inexact(out->mesh);
   bool repaired = false;
   // Its smoothing checks for degenerate faces with CGAL_warning (printed, not thrown) and
   // goes on; the result is checked here.

@@ -6,6 +6,7 @@
 // convert back to the same doubles: faces from input solids keep the input's positions.
 #pragma once
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <string>
@@ -21,6 +22,10 @@ using ExactPoint = Exact::Point_3;
 using ExactMesh = CGAL::Surface_mesh<ExactPoint>;
 
 ExactMesh to_exact(const TriangleMesh& mesh);
+// The same mesh in the double kernel (exact predicates, inexact constructions), vertex and
+// face indices as in `mesh`: for tests on meshes whose points are doubles.
+using InexactMesh = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
+InexactMesh to_inexact(const TriangleMesh& mesh);
 // Rounds to doubles; vertex order is the mesh's.
 TriangleMesh to_double(const ExactMesh& mesh);
 
