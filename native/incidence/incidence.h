@@ -33,6 +33,8 @@ class ClosedSurface {
   double distance(const Vec3& p) const;
   bool inside(const Vec3& p) const;             // points on the surface count as inside
   double signed_distance(const Vec3& p) const;  // <= 0 inside (paper: D(p) <= 0 for p in S)
+  // The same, with the nearest point on the surface (nearest_point) from the same query.
+  double signed_distance(const Vec3& p, Vec3* nearest) const;
   // Axis-aligned bounds, for cheap rejection before tree queries.
   const Vec3& min_corner() const;
   const Vec3& max_corner() const;

@@ -68,6 +68,15 @@ double ClosedSurface::signed_distance(const Vec3& p) const {
   return inside(p) ? -d : d;
 }
 
+double ClosedSurface::signed_distance(const Vec3& p, Vec3* nearest) const {
+  // As distance() computes it: the tree's squared distance is that to its closest point.
+  const Point query(p.x(), p.y(), p.z());
+  const Point q = impl_->tree.closest_point(query);
+  *nearest = Vec3(q.x(), q.y(), q.z());
+  const double d = std::sqrt(CGAL::to_double(CGAL::squared_distance(query, q)));
+  return inside(p) ? -d : d;
+}
+
 const Vec3& ClosedSurface::min_corner() const { return impl_->lo; }
 const Vec3& ClosedSurface::max_corner() const { return impl_->hi; }
 

@@ -153,12 +153,19 @@ int SideDistance::nearest_member(const Vec3& p) const {
 }
 
 double SideDistance::value(const Vec3& p, Vec3* gradient) const {
-  const int j = nearest_member(p);
+  // The nearest member (nearest_member) and its projection q, one tree query per member.
+  int j = members_[0];
+  double d = std::numeric_limits<double>::infinity();
+  Vec3 q = p;
+  for (int m : members_) {
+    Vec3 nearest;
+    const double dm = solids_->surface(m).signed_distance(p, &nearest);
+    if (dm < d) d = dm, j = m, q = nearest;
+  }
   const ClosedSurface& s = solids_->surface(j);
-  const double d = s.signed_distance(p);
   if (gradient) {
     // ∇D = sign(D)·(p − q)/|p − q| with q the projection (the unit normal at q, §7.2).
-    const Vec3 diff = p - s.nearest_point(p);
+    const Vec3 diff = p - q;
     if (diff.norm() > 1e-9 * scale_) {
       *gradient = (d < 0 ? -1.0 : 1.0) * diff.normalized();
     } else {
