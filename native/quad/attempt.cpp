@@ -24,6 +24,11 @@ namespace quad_detail {
 // takes several); more rounds change nothing.
 constexpr int kPlaceRounds = 16;
 
+// Sequences of edits one placing may score per cage quad (PlaceSettings::max_scored), so
+// that its cost grows with the cage rather than with how tangled the cage is (docs/
+// quad_method.md, step 5).
+constexpr double kPlaceScoredPerQuad = 300;
+
 
 // Per cage vertex: an irregular vertex a singularity of `singular` explains
 // (matched_irregulars at `density`).
@@ -86,7 +91,8 @@ void place_onto_singularities(const quad_detail::Surface& surface,
                               const quad_detail::CageChecks& checks, QuadCage* cage,
                               QuadStats* stats, quad_detail::Messages* messages,
                               const quad_detail::Dropped& dropped, const QuadOptions& options,
-                              const std::vector<quad_detail::SingularPoint>& singular) {
+                              const std::vector<quad_detail::SingularPoint>& singular,
+                              double* scored) {
   const double density = options.density;
   QuadCage placed = *cage;
   quad_detail::PlaceSettings settings;
@@ -98,8 +104,9 @@ void place_onto_singularities(const quad_detail::Surface& surface,
   settings.chain_vertices = options.place_chain_vertices;
   settings.settle_rings = options.settle_rings;
   settings.settle_sweeps = options.settle_sweeps;
+  settings.max_scored = kPlaceScoredPerQuad * static_cast<double>(cage->quads.rows());
   const int windows = quad_detail::place_irregulars(checks, placed, singular, density, kPlaceRounds,
-                                                    settings, dropped);
+                                                    settings, dropped, scored);
   if (!windows) return;
   const int off = quad_detail::irregular_off_singularities(checks, *cage, singular, density);
   const int left = quad_detail::open_squeezed(checks, placed, 24);
@@ -175,7 +182,8 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
                             const quad_detail::CageChecks& checks, QuadCage* cage,
                             quad_detail::Messages* messages, const quad_detail::Dropped& dropped,
                             const QuadOptions& options,
-                            const std::vector<quad_detail::SingularPoint>* singular) {
+                            const std::vector<quad_detail::SingularPoint>* singular,
+                            double* scored) {
   QuadStats stats = quad_detail::measure_cage(*cage, checks);
   if (stats.flipped_quads || stats.degenerate_quads) {
     const int bad = stats.flipped_quads + stats.degenerate_quads;
@@ -221,7 +229,7 @@ QuadStats measure_untangled(const quad_detail::Surface& surface,
          quad_detail::irregular_off_singularities(checks, *cage, *singular, options.density) ||
          chain_vertices_left(*cage, options)))
       place_onto_singularities(surface, checks, cage, &stats, messages, dropped, options,
-                               *singular);
+                               *singular, scored);
     even_out_kept(surface, checks, cage, &stats, messages, dropped, options, singular);
   }
   return stats;
@@ -343,12 +351,13 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
   quad_detail::Layout layout = quad_detail::start_layout(surface);
   layout.costly_nodes = costly_nodes;
   // The work so far: tracing, rounds of building patches, branch-and-bound nodes × arcs
-  // of quantization, quads filled (weights: QuadOptions::work_per_component).
+  // of quantization, quads filled, sequences of edits scored placing irregular vertices
+  // (weights: QuadOptions::work_per_component).
   const double triangles = static_cast<double>(surface.mesh.n_faces());
-  double branching = 0;
+  double branching = 0, scored = 0;
   auto work_so_far = [&] {
     return triangles * (2 + layout.patch_rounds) + 15 * branching +
-           850 * static_cast<double>(cage->quads.rows());
+           850 * static_cast<double>(cage->quads.rows()) + 4 * scored;
   };
   // Also when the attempt fails part way.
   struct Tally {
@@ -420,7 +429,7 @@ void extract_once(const ComponentInputs& in, const QuadOptions& options,
                                       std::to_string(doublets) +
                                       " doublets (interior vertices of two quads) removed");
     *stats = measure_untangled(surface, checks, cage, &filled_messages, dropped, options,
-                               options.place_irregulars ? &singular : nullptr);
+                               options.place_irregulars ? &singular : nullptr, &scored);
     std::set<int> tangled;  // the patches the quads left turned over came from
     if ((stats->flipped_quads || stats->degenerate_quads) && repair < options.max_tangle_rounds)
       tangled = patches_of_bad_quads(checks, *cage, filled, quad_patch);

@@ -523,8 +523,9 @@ void ComponentSearch::search() {
     // one that was cut short.
     size_t taken = batch;
     for (size_t i = 0; i < taken && !stop; ++i, ++k) {
+      // The requested layout's pair is taken whatever the work (pair_second_readings).
       if (i > 0 && ((first_meeting >= 0 && tried_after_meeting >= choices_after_meeting) ||
-                    out_of_work(k))) {
+                    (!(pair && i == 1) && out_of_work(k)))) {
         stop = true;
         break;
       }

@@ -466,8 +466,10 @@ int chain_vertices_to_shed(const QuadCage& cage) {
 
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
-                     const PlaceSettings& settings, const Dropped& dropped) {
+                     const PlaceSettings& settings, const Dropped& dropped, double* scored_out) {
   const int max_edits = settings.max_edits;
+  double scored_count = 0;  // sequences scored (settings.max_scored)
+  auto spent = [&] { return settings.max_scored > 0 && scored_count >= settings.max_scored; };
   // Raised by one (up to settings.climb_last) where a round makes no edit.
   int climb = settings.climb;
   int total = 0;
@@ -511,6 +513,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
         if (shed[v]) starts.push_back(v);
     for (const int start_vertex : starts) {
       if (vain[start_vertex]) continue;
+      if (spent()) break;
       dropped.check();
       // The window: rings around the vertex by breadth-first search.
       std::vector<int> reached = {start_vertex};
@@ -569,6 +572,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       // unexplained vertices (or as many, no more irregular ones, drawn kPairCloser nearer
       // to ones of opposite sign) are kept, best first.
       auto score_now = [&] {
+        ++scored_count;
         return score(s, near, scored, window_vertices, explains, start_point, rivals,
                      settings.draw_pairs_together);
       };
@@ -601,7 +605,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
       ++now;
     }
     // Where a round makes no edit, every window is searched again climbing by one more.
-    if (!now && climb < settings.climb_last) {
+    if (!now && climb < settings.climb_last && !spent()) {
       ++climb;
       std::fill(vain.begin(), vain.end(), 0);
       continue;
@@ -611,6 +615,7 @@ int place_irregulars(const CageChecks& checks, QuadCage& cage,
     // Compacted: removed quads and vertices no quad or chain uses dropped.
     vain = compact(cage, points, quads, searched, locked);
   }
+  if (scored_out) *scored_out += scored_count;
   return total;
 }
 

@@ -65,10 +65,12 @@ struct QuadOptions {
   double density = 1.0;
   // Work per component for trying layout choices (units counted from the attempts
   // themselves: tracing 2 per triangle, each round of building patches 1 per triangle,
-  // each branch-and-bound node 15 per arc, filling and untangling 850 per quad; about
-  // 2.5 million per second of one core), so that the search stops at the same choice on
-  // every machine. The requested layout always runs; 0: it alone. Default 3e8.
-  double work_per_component = 3e8;
+  // each branch-and-bound node 15 per arc, filling and untangling 850 per quad, each
+  // sequence of edits scored placing irregular vertices 4; about 2.5 million per second
+  // of one core), so that the search stops at the same choice on
+  // every machine. The requested layout always runs (and its pair:
+  // pair_second_readings); 0: it alone. Default 3e7.
+  double work_per_component = 3e7;
   // Layout choices tried at once, one thread each (0: the hardware threads, at most 4).
   // The kept cage does not depend on it. Default 0.
   int parallel_choices = 0;
@@ -145,7 +147,8 @@ struct QuadOptions {
   double off_node_price = 4.0;
   double off_node_share = 0.02;
   int off_node_count = 2;
-  // The requested layout and its pair both read once before either is read again.
+  // The requested layout and its pair (its arrivals flipped) are both tried whatever the
+  // work (work_per_component above 0), and both read once before either is read again.
   bool pair_second_readings = true;
   // After the first cage that meets the targets, more choices while choices × triangles
   // stays within work_after_meeting, and at least min_choices_after_meeting.

@@ -1688,6 +1688,42 @@ TEST(Quad, ABoundaryDislocationGlidesIntoTheSingularitiesAFewRowsIn) {
         << i;
 }
 
+// A placing scores at most PlaceSettings::max_scored sequences of edits, and starts no
+// window after that: on a 15 × 15 grid with two edge rotations far apart (a 3, 3, 5, 5
+// cluster each, no singularity), the unlimited search rotates both back in disjoint windows
+// of one round; with a budget of one sequence only the first window is searched and edited,
+// the other cluster stays, and fewer sequences are scored.
+TEST(Quad, APlacingStartsNoWindowOnceItsScoredSequencesAreSpent) {
+  const FlatChecks square(71, 0.2);  // the square [0, 14]², target size 1
+  const quad_detail::CageChecks& checks = square.checks;
+  const int m = 15;
+  auto at = [&](int x, int y) { return y * m + x; };
+  QuadCage cage = regular_flat_cage(m);
+  rotate_edge(cage, at(3, 3), at(4, 3), at(3, 2));
+  rotate_edge(cage, at(10, 10), at(11, 10), at(10, 9));
+  quad_detail::relax_cage(checks, cage, 200, 0.5);
+  ASSERT_EQ(bad_flat_quads(cage), 0);
+  ASSERT_EQ(interior_valences(cage), (std::map<int, int>{{3, 4}, {4, 161}, {5, 4}}));
+  ASSERT_EQ(quad_detail::irregular_off_singularities(checks, cage, {}, 1.0), 8);
+  quad_detail::PlaceSettings settings;
+  QuadCage unlimited = cage, limited = cage;
+  double scored_unlimited = 0, scored_limited = 0;
+  EXPECT_GE(quad_detail::place_irregulars(checks, unlimited, {}, 1.0, 4, settings,
+                                          quad_detail::Dropped(), &scored_unlimited),
+            2);
+  EXPECT_EQ(interior_valences(unlimited), (std::map<int, int>{{4, 169}}));
+  settings.max_scored = 1;
+  EXPECT_EQ(quad_detail::place_irregulars(checks, limited, {}, 1.0, 4, settings,
+                                          quad_detail::Dropped(), &scored_limited),
+            1);
+  const int left = quad_detail::irregular_off_singularities(checks, limited, {}, 1.0);
+  EXPECT_GT(left, 0);
+  EXPECT_LT(left, 8);
+  EXPECT_EQ(bad_flat_quads(limited), 0);
+  EXPECT_GE(scored_limited, 1);
+  EXPECT_LT(scored_limited, scored_unlimited);
+}
+
 // The jog a join leaves is read as a straight step: on a flat 4 × 4 square bounded by four
 // curves, with a curve S across it at y = 2 and a separatrix leaving the left side at
 // y = 2.2 that joins S, the layout has three four-sided patches (below S, the strip
@@ -2004,7 +2040,7 @@ TEST(Quad, WhereARoundMakesNoEditWindowsAreSearchedAgainClimbingHigher) {
 // vertices away from singularities and its sibling's none, and with none left and the
 // corner angles even the requested layout would still not be kept: it is not read again,
 // the notes say so, and the cage kept is the sibling's, the same as when the requested
-// layout is read again and loses to it; on one thread as on two.
+// layout is read again and loses to it (given the work for it); on one thread as on two.
 TEST(Quad, ASiblingThatLeavesNoneUnexplainedSparesTheRequestedLayoutASecondReading) {
   const Partitioned r = relaxed(partition_scene(net_scene(0.11, 5)));
   const CrossField field = compute_field(r.mesh, r.partition, {}, Context());
@@ -2012,6 +2048,9 @@ TEST(Quad, ASiblingThatLeavesNoneUnexplainedSparesTheRequestedLayoutASecondReadi
     QuadOptions options;
     options.pair_second_readings = pair;
     options.parallel_choices = threads;
+    // Unpaired, the sibling runs only if the work allows it after the requested layout's
+    // two readings.
+    if (!pair) options.work_per_component = 1e8;
     return extract_cages(r.mesh, r.partition, field, options, Context());
   };
   const QuadResult paired = run(true, 2), one_thread = run(true, 1), unpaired = run(false, 2);

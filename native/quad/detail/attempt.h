@@ -76,11 +76,13 @@ void read_off_nodes_again(const ComponentInputs& in, const QuadOptions& options,
 // reported. A valid cage is then evened out (even_out_kept). With `singular`, irregular
 // vertices none of them explains are placed first (place_onto_singularities), and those
 // they explain are held in the evening out, which runs QuadOptions::place_passes times;
-// the placing runs again before it while some are still unexplained.
+// the placing runs again before it while some are still unexplained. Each placing scores
+// at most kPlaceScoredPerQuad sequences per quad; how many it scored goes to *scored.
 QuadStats measure_untangled(const Surface& surface, const CageChecks& checks, QuadCage* cage,
                             Messages* messages, const Dropped& dropped,
                             const QuadOptions& options,
-                            const std::vector<SingularPoint>* singular = nullptr);
+                            const std::vector<SingularPoint>* singular = nullptr,
+                            double* scored = nullptr);
 // A cage with its corners squared (square_cage: 10 sweeps, on `threads` threads, the same
 // result for any number), if it stays valid and its corners come closer to 90°.
 struct Squared {

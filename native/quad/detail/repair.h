@@ -57,6 +57,9 @@ struct PlaceSettings {
   bool chain_vertices = false;
   int settle_rings = 0;   // rings evened out beyond the changed vertices' neighbours
   int settle_sweeps = 3;  // sweeps of that evening out
+  // Sequences scored, at most, over all windows and rounds (0: no limit); once reached no
+  // window is started, so that the search costs at most about this much on any cage.
+  double max_scored = 0;
 };
 // Moves irregular vertices no singularity explains (irregular_off_singularities) onto the
 // singularities beside them, or cancels them (place.cpp): around each, sequences of up to
@@ -74,11 +77,12 @@ struct PlaceSettings {
 // the next searches every window again climbing by one more, up to settings.climb_last).
 // A window counts the cage's irregular vertices beyond it that compete for its
 // singularities (settings.rivals). The caller opens squeezed quads and checks the cage.
-// Returns the windows edited (0: the cage is unchanged).
+// Returns the windows edited (0: the cage is unchanged); the sequences scored go to
+// *scored (settings.max_scored).
 int place_irregulars(const CageChecks& checks, QuadCage& cage,
                      const std::vector<SingularPoint>& singular, double density, int max_rounds,
                      const PlaceSettings& settings = PlaceSettings(),
-                     const Dropped& dropped = Dropped());
+                     const Dropped& dropped = Dropped(), double* scored = nullptr);
 // The chain vertices of `cage` of three quads or more where their loop is smooth (the
 // quads' corners at it sum to under 225°: two quads would cover it), which
 // place_irregulars may take a quad from.
