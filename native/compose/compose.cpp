@@ -42,6 +42,11 @@ struct Accumulator {
   ExactMesh mesh;
   bool empty = true;
   std::string why;
+  // Vertices within `snap` of the other operand's surface are moved onto it before each
+  // Boolean (detail::snap_onto: the operand onto G, then G onto the moved operand), if both
+  // stay usable; `snapped` counts them. 0: never.
+  double snap = 0;
+  int snapped = 0;
 
   bool apply(ExactMesh operand, bool unite, const std::string& what, bool checked = false) {
     const std::string unusable = checked ? std::string() : detail::make_usable(&operand, true);
@@ -54,6 +59,17 @@ struct Accumulator {
       return true;
     }
     ExactMesh out;
+    if (snap > 0) {
+      ExactMesh a = mesh, b = operand;
+      const int moved = detail::snap_onto(&b, a, snap) + detail::snap_onto(&a, b, snap);
+      if (moved > 0 && detail::unusable_operand(a, true).empty() &&
+          detail::unusable_operand(b, true).empty() && detail::exact_boolean(a, b, unite, &out)) {
+        snapped += moved;
+        mesh = std::move(out);
+        if (mesh.is_empty()) empty = true;
+        return true;
+      }
+    }
     if (!detail::exact_boolean(mesh, operand, unite, &out)) {
       why = std::string(unite ? "uniting " : "subtracting ") + what + " gives a non-manifold result";
       return false;
@@ -63,6 +79,23 @@ struct Accumulator {
     return true;
   }
 };
+
+// Operand vertices this near another operand's surface (× the scene's size) are moved
+// onto it before each Boolean of the floor when the floor without it fails
+// (Accumulator::snap): surfaces that nearly coincide then coincide exactly, and
+// corefinement resolves them as coplanar faces instead of cutting slivers thinner than a
+// double can hold, which no rounding keeps from folding (docs/compose_method.md).
+constexpr double kSnap = 1e-9;
+
+void note_snapped(const Accumulator& g, ComposeReport* report) {
+  if (g.snapped == 0) return;
+  char text[240];
+  std::snprintf(text, sizeof text,
+                "%d vertices within %g x the scene's size of another operand moved onto it before "
+                "the Booleans (nearly coincident surfaces made coincident)",
+                g.snapped, kSnap);
+  report->notes.push_back(text);
+}
 
 // Per face: the first solid whose triangles hold all three corners (to 1e-9 relative,
 // the rounding of intersection vertices), else the nearest trimmed organic sheet.
@@ -423,14 +456,49 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   }
   report.diagnostics.push_back("the organic components cannot all be composed: " + failed);
   if (!design) return out;
-  // The floor: the whole design as an exact Boolean with the solids.
-  Accumulator g;
-  const bool ok = design_boolean(*design, solids, context, &g);
+  // The floor: the whole design as an exact Boolean with the solids. Where it rounds to a
+  // mesh that crosses itself or cannot be composed, it is composed again with nearly
+  // coincident vertices snapped (Accumulator::snap): slower, so only then.
+  // Faces off the solids are attributed to the nearest component's design region.
+  cells.clear();
+  for (const auto& surface : surfaces) {
+    if (surface.sheet.mesh.triangles.rows() == 0) continue;
+    cells.emplace_back();
+    cells.back().component = surface.sheet.component;
+    cells.back().trimmed = detail::to_exact(surface.sheet.mesh);
+  }
+  const size_t diagnostics_before = report.diagnostics.size(), notes_before = report.notes.size();
+  bool composed = false;
+  std::string why[2];  // why each attempt could not compose, unsnapped and snapped
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    Accumulator g;
+    g.snap = attempt == 0 ? 0 : kSnap * scale;
+    if (!design_boolean(*design, solids, context, &g)) {
+      why[attempt] = g.why;
+      continue;
+    }
+    if (composed) {
+      // The first result crossed itself: its words give way to this one's.
+      report.diagnostics.resize(diagnostics_before);
+      report.notes.resize(notes_before);
+      report.notes.push_back("the design Boolean rounded to a mesh that crosses itself; composed again "
+                             "with nearly coincident vertices snapped");
+    }
+    finish(g.mesh, solids, cells, scale, &out);
+    note_snapped(g, &report);
+    composed = true;
+    if (report.ok) break;
+  }
   report.seconds_boolean = seconds_since(start);
-  if (!ok) {
+  if (composed && !report.ok && !why[1].empty())
+    report.diagnostics.push_back("with nearly coincident vertices snapped, the design Boolean cannot be "
+                                 "composed: " + why[1]);
+  if (!composed) {
     report.ok = false;
     report.diagnostics.push_back("the design Boolean (the design with the keep-ins added and the keep-outs "
-                                 "removed) cannot be composed either: " + g.why);
+                                 "removed) cannot be composed either: " + why[0] +
+                                 (why[1] != why[0] ? "; with nearly coincident vertices snapped: " + why[1]
+                                                   : std::string()));
     return out;
   }
   report.floor = true;
@@ -440,15 +508,6 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     contact.fallback = contact.established ? failed : (contact.diagnostics.empty() ? failed : contact.diagnostics.back());
     contact.surface = "design Boolean";
   }
-  // Faces off the solids are attributed to the nearest component's design region.
-  cells.clear();
-  for (const auto& surface : surfaces) {
-    if (surface.sheet.mesh.triangles.rows() == 0) continue;
-    cells.emplace_back();
-    cells.back().component = surface.sheet.component;
-    cells.back().trimmed = detail::to_exact(surface.sheet.mesh);
-  }
-  finish(g.mesh, solids, cells, scale, &out);
   report.diagnostics.push_back("composed as the design Boolean (the design with the keep-ins added and the "
                                "keep-outs removed), because " + failed);
   return out;

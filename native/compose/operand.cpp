@@ -4,6 +4,9 @@
 // require closed meshes that bound a volume. Violating them is undefined behaviour: a
 // SIGSEGV inside the corefinement's intersection filter was seen on an unsmoothed voxel
 // bracket. Every operand is checked here first; a failed check takes the next tier.
+#include <CGAL/AABB_face_graph_triangle_primitive.h>
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
@@ -91,6 +94,58 @@ std::string make_usable(ExactMesh* mesh, bool closed) {
     mesh->collect_garbage();
   }
   return unusable_operand(*mesh, closed);
+}
+
+int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta) {
+  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Inexact, CGAL::AABB_face_graph_triangle_primitive<InexactMesh>>>;
+  // `other` rounded, to find each vertex's nearest face; the moves are exact.
+  InexactMesh near;
+  std::vector<InexactMesh::Vertex_index> rounded(other.number_of_vertices() + other.number_of_removed_vertices());
+  for (const auto v : other.vertices()) {
+    const ExactPoint& p = other.point(v);
+    rounded[v.idx()] = near.add_vertex(
+        InexactMesh::Point(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())));
+  }
+  std::vector<ExactMesh::Face_index> face_of;  // near's faces, in order, as other's
+  for (const auto f : other.faces()) {
+    std::vector<InexactMesh::Vertex_index> corners;
+    for (const auto v : CGAL::vertices_around_face(other.halfedge(f), other)) corners.push_back(rounded[v.idx()]);
+    if (near.add_face(corners) == InexactMesh::null_face()) return 0;
+    face_of.push_back(f);
+  }
+  if (face_of.empty()) return 0;
+  Tree tree(faces(near).first, faces(near).second, near);
+  tree.accelerate_distance_queries();
+  const Exact::FT limit = Exact::FT(delta) * Exact::FT(delta);
+  auto within = [&](const Exact::FT& squared) { return CGAL::compare(squared, limit) != CGAL::LARGER; };
+  int moved = 0;
+  for (const auto v : mesh->vertices()) {
+    const ExactPoint p = mesh->point(v);
+    const Inexact::Point_3 q(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
+    const auto [foot, face] = tree.closest_point_and_primitive(q);
+    if (CGAL::squared_distance(q, foot) > 4 * delta * delta) continue;
+    ExactPoint corner[3];
+    int k = 0;
+    for (const auto w : CGAL::vertices_around_face(other.halfedge(face_of[face.idx()]), other))
+      corner[k++] = other.point(w);
+    // Onto a corner within delta, else onto an edge's line, else onto the face's plane.
+    std::optional<ExactPoint> onto;
+    for (int i = 0; i < 3 && !onto; ++i)
+      if (within(CGAL::squared_distance(p, corner[i]))) onto = corner[i];
+    for (int i = 0; i < 3 && !onto; ++i) {
+      const Exact::Line_3 line(corner[i], corner[(i + 1) % 3]);
+      if (within(CGAL::squared_distance(p, line))) onto = line.projection(p);
+    }
+    if (!onto) {
+      const Exact::Plane_3 plane(corner[0], corner[1], corner[2]);
+      if (within(CGAL::squared_distance(p, plane))) onto = plane.projection(p);
+    }
+    if (!onto || *onto == p) continue;
+    mesh->point(v) = *onto;
+    ++moved;
+  }
+  return moved;
 }
 
 bool exact_boolean(const ExactMesh& a, const ExactMesh& b, bool unite, ExactMesh* out) {

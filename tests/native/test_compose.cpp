@@ -19,6 +19,8 @@
 #include <set>
 
 #include "compose/compose.h"
+#include "compose/detail/exact.h"
+#include "corpus_design.h"
 #include "fixtures.h"
 #include "incidence/incidence.h"
 #include "level_set.h"
@@ -937,6 +939,49 @@ TEST_P(NearCoincidentBore, GivesASolidWithoutSelfIntersections) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Epsilons, NearCoincidentBore, ::testing::Values(0.0, 1e-12, 1e-9, 1e-6, 1e-3));
+
+// Near coincidence in the design Boolean (generated seed 2: a plate's hole and a keep-out
+// bore whose walls agree to 4e-16 on a tilted axis): (design ∪ keep-ins) \ keep-outs,
+// exact, rounded to doubles with the short edges collapsed, crosses itself; with each
+// operand's vertices within 1e-9 × the scene moved onto the other operand first
+// (detail::snap_onto, as the floor's second attempt does), it rounds without a crossing
+// and bounds the same volume.
+TEST(Compose, SnappingNearlyCoincidentOperandsLetsTheDesignBooleanRoundWithoutCrossings) {
+  using detail::ExactMesh;
+  const GeneratedCase c = generate_case(2);
+  const double scene = bounding_box_diagonal(c.design.vertices);
+  auto design_boolean = [&](double snap, int* moved) {
+    ExactMesh g = detail::to_exact(c.design);
+    for (const Role role : {Role::KeepIn, Role::KeepOut})
+      for (const GeneratedSolid& solid : c.solids) {
+        if (solid.role != role) continue;
+        ExactMesh operand = detail::to_exact(solid.mesh), out;
+        if (snap > 0) *moved += detail::snap_onto(&operand, g, snap) + detail::snap_onto(&g, operand, snap);
+        EXPECT_TRUE(detail::exact_boolean(g, operand, role == Role::KeepIn, &out)) << solid.name;
+        g = std::move(out);
+      }
+    return g;
+  };
+  auto rounded = [&](const ExactMesh& g) { return detail::round_to_doubles(g, 1e-10 * scene).mesh; };
+  auto crossings = [&](const TriangleMesh& m) {
+    std::vector<std::pair<detail::InexactMesh::Face_index, detail::InexactMesh::Face_index>> pairs;
+    CGAL::Polygon_mesh_processing::self_intersections(detail::to_inexact(m), std::back_inserter(pairs));
+    return pairs.size();
+  };
+  int moved = 0;
+  const TriangleMesh plain = rounded(design_boolean(0, &moved));
+  ASSERT_EQ(moved, 0);
+  ASSERT_GT(crossings(plain), 0u);
+  const TriangleMesh snapped = rounded(design_boolean(1e-9 * scene, &moved));
+  std::printf("[compose] seed 2 design Boolean: %zu crossing pairs; %d vertices snapped: %zu\n",
+              crossings(plain), moved, crossings(snapped));
+  EXPECT_GT(moved, 0);
+  EXPECT_EQ(crossings(snapped), 0u);
+  const MeshValidation before = validate(plain), after = validate(snapped);
+  EXPECT_EQ(after.boundary_edges, 0);
+  EXPECT_EQ(after.non_manifold_edges, 0);
+  EXPECT_NEAR(after.signed_volume, before.signed_volume, 1e-6 * std::abs(before.signed_volume));
+}
 
 // CGAL's corefinement requires operands without self-intersections; a keep-out that
 // crosses itself (two overlapping boxes as one mesh, past the mesh stage's checks) is

@@ -61,6 +61,11 @@ std::string unusable_operand(const ExactMesh& mesh, bool closed);
 // surface keeps its shape), which the mesh stage accepts and CGAL does not.
 std::string make_usable(ExactMesh* mesh, bool closed);
 
+// Vertices of `mesh` within `delta` of `other`'s surface moved exactly onto it: onto the
+// nearest face's corner within delta, else onto the line of its edge within delta, else
+// onto its plane. Returns how many moved; none moves by more than delta (operand.cpp).
+int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta);
+
 // a ∪ b (unite) or a \ b, exactly, both closed and usable (make_usable). The result is
 // checked (a valid, closed halfedge mesh); false when it is not one.
 bool exact_boolean(const ExactMesh& a, const ExactMesh& b, bool unite, ExactMesh* out);
