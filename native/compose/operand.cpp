@@ -99,21 +99,10 @@ std::string make_usable(ExactMesh* mesh, bool closed) {
 int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta) {
   using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Inexact, CGAL::AABB_face_graph_triangle_primitive<InexactMesh>>>;
-  // `other` rounded, to find each vertex's nearest face; the moves are exact.
-  InexactMesh near;
-  std::vector<InexactMesh::Vertex_index> rounded(other.number_of_vertices() + other.number_of_removed_vertices());
-  for (const auto v : other.vertices()) {
-    const ExactPoint& p = other.point(v);
-    rounded[v.idx()] = near.add_vertex(
-        InexactMesh::Point(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())));
-  }
-  std::vector<ExactMesh::Face_index> face_of;  // near's faces, in order, as other's
-  for (const auto f : other.faces()) {
-    std::vector<InexactMesh::Vertex_index> corners;
-    for (const auto v : CGAL::vertices_around_face(other.halfedge(f), other)) corners.push_back(rounded[v.idx()]);
-    if (near.add_face(corners) == InexactMesh::null_face()) return 0;
-    face_of.push_back(f);
-  }
+  // `other` rounded (its faces in order), to find each vertex's nearest face; the moves
+  // are exact.
+  const InexactMesh near = to_inexact(to_double(other));
+  const std::vector<ExactMesh::Face_index> face_of(other.faces().begin(), other.faces().end());
   if (face_of.empty()) return 0;
   Tree tree(faces(near).first, faces(near).second, near);
   tree.accelerate_distance_queries();

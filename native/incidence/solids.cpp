@@ -64,8 +64,8 @@ bool ClosedSurface::inside(const Vec3& p) const {
 }
 
 double ClosedSurface::signed_distance(const Vec3& p) const {
-  const double d = distance(p);
-  return inside(p) ? -d : d;
+  Vec3 nearest;
+  return signed_distance(p, &nearest);
 }
 
 double ClosedSurface::signed_distance(const Vec3& p, Vec3* nearest) const {

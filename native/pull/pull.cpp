@@ -142,18 +142,8 @@ SideDistance::SideDistance(const SolidSet& solids, std::vector<int> members, int
   }
 }
 
-int SideDistance::nearest_member(const Vec3& p) const {
-  int best = members_[0];
-  double best_d = std::numeric_limits<double>::infinity();
-  for (int j : members_) {
-    const double d = solids_->surface(j).signed_distance(p);
-    if (d < best_d) best_d = d, best = j;
-  }
-  return best;
-}
-
 double SideDistance::value(const Vec3& p, Vec3* gradient) const {
-  // The nearest member (nearest_member) and its projection q, one tree query per member.
+  // The member whose surface is nearest p, and its projection q: one tree query per member.
   int j = members_[0];
   double d = std::numeric_limits<double>::infinity();
   Vec3 q = p;

@@ -75,8 +75,6 @@ class SideDistance {
  public:
   SideDistance(const SolidSet& solids, std::vector<int> members, int side);
   double value(const Vec3& p, Vec3* gradient = nullptr) const;
-  // The member whose surface is nearest p.
-  int nearest_member(const Vec3& p) const;
 
  private:
   const SolidSet* solids_;
