@@ -88,8 +88,8 @@ bool crosses_itself(const TriangleMesh& mesh) {
 
 // Whether two triangles of `mesh` that cross lie in one plane. CGAL 5.5's autorefinement
 // fails an internal assertion on a mesh with such pairs (Corefinement/Visitor.h,
-// "insert_ok"; without assertions it went on and crashed generated seed 18 in two runs of
-// three), so where they occur it is not called.
+// "insert_ok"; without assertions it runs on and can crash, docs/compose_method.md), so
+// where they occur it is not called.
 bool crosses_coplanar(const ExactMesh& mesh) {
   std::vector<std::pair<ExactMesh::Face_index, ExactMesh::Face_index>> pairs;
   CGAL::Polygon_mesh_processing::self_intersections(mesh, std::back_inserter(pairs));
@@ -166,8 +166,8 @@ Rounded round_robustly(const ExactMesh& exact, double scale) {
   // crossed. CGAL throws where three triangles cross along one segment; that ends the
   // rounds.
   // The volume before any repair: a round that changes it by more than 0.1% cut off more
-  // than slivers (autorefinement drops whole patches where it reads the crossings wrong:
-  // generated seed 2's design Boolean once came back as 4 triangles) and is not taken.
+  // than slivers (autorefinement can drop whole patches where it reads the crossings
+  // wrong, docs/compose_method.md) and is not taken.
   const double volume = validate(out.mesh).signed_volume;
   for (int round = 0; round < 2 && out.intersecting; ++round) {
     ExactMesh again = to_exact(out.mesh);
