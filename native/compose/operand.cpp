@@ -148,15 +148,21 @@ bool exact_boolean(const ExactMesh& a, const ExactMesh& b, bool unite, ExactMesh
 }
 
 double signed_volume(const ExactMesh& m) {
+  // Summed about one of its own points, not the origin (see validate(), mesh/validate.cpp).
   double sum = 0, magnitude = 0;
+  Vec3 o = Vec3::Zero();
+  if (!m.is_empty()) {
+    const auto& p = m.point(*m.vertices().begin());
+    o = Vec3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
+  }
   for (const auto f : m.faces()) {
     const auto h = m.halfedge(f);
     const auto& a = m.point(m.source(h));
     const auto& b = m.point(m.target(h));
     const auto& c = m.point(m.target(m.next(h)));
-    const Vec3 pa(CGAL::to_double(a.x()), CGAL::to_double(a.y()), CGAL::to_double(a.z()));
-    const Vec3 pb(CGAL::to_double(b.x()), CGAL::to_double(b.y()), CGAL::to_double(b.z()));
-    const Vec3 pc(CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z()));
+    const Vec3 pa = Vec3(CGAL::to_double(a.x()), CGAL::to_double(a.y()), CGAL::to_double(a.z())) - o;
+    const Vec3 pb = Vec3(CGAL::to_double(b.x()), CGAL::to_double(b.y()), CGAL::to_double(b.z())) - o;
+    const Vec3 pc = Vec3(CGAL::to_double(c.x()), CGAL::to_double(c.y()), CGAL::to_double(c.z())) - o;
     const double six = pa.dot(pb.cross(pc));
     sum += six;
     magnitude += std::abs(six);

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "core/union_find.h"
@@ -83,9 +84,19 @@ MeshValidation validate(const TriangleMesh& mesh) {
   const auto& T = mesh.triangles;
   v.vertices = static_cast<int>(V.rows());
   v.triangles = static_cast<int>(T.rows());
+  // The volume is summed about the centre of the bounding box, not the origin: a small part
+  // far from the origin (coordinates 1e3, size 1e-2) would otherwise lose its volume, and
+  // with it its orientation, to cancellation between terms a billion times larger.
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
-    if (!V.row(i).allFinite()) ++v.non_finite_vertices;
+    if (!V.row(i).allFinite()) {
+      ++v.non_finite_vertices;
+      continue;
+    }
+    lo = lo.cwiseMin(V.row(i).transpose());
+    hi = hi.cwiseMax(V.row(i).transpose());
   }
+  const Vec3 centre = lo.allFinite() && hi.allFinite() ? Vec3(0.5 * (lo + hi)) : Vec3::Zero();
   std::vector<DirectedEdge> edges;
   edges.reserve(3 * static_cast<size_t>(T.rows()));
   for (int t = 0; t < v.triangles; ++t) {
@@ -97,7 +108,7 @@ MeshValidation validate(const TriangleMesh& mesh) {
     const Vec3 pa = V.row(a), pb = V.row(b), pc = V.row(c);
     const Vec3 cross = (pb - pa).cross(pc - pa);
     if (cross.squaredNorm() == 0) ++v.zero_area_triangles;
-    if (cross.allFinite()) v.signed_volume += pa.dot(pb.cross(pc)) / 6.0;
+    if (cross.allFinite()) v.signed_volume += (pa - centre).dot((pb - centre).cross(pc - centre)) / 6.0;
     for (int k = 0; k < 3; ++k) {
       const int from = T(t, k), to = T(t, (k + 1) % 3);
       edges.push_back({std::min(from, to), std::max(from, to), t, from < to});

@@ -227,6 +227,18 @@ TEST(MeshPrepare, FlipsAnInsideOutSurfaceAndSaysSo) {
   EXPECT_NE(notes[0].find("inside out"), std::string::npos);
 }
 
+TEST(MeshPrepare, KeepsTheOrientationOfASmallPartFarFromTheOrigin) {
+  // 4 x 3 x 2 hundredths at (648, -679, 1430): summed about the origin, the volume's terms
+  // are 1e9 times the part's and their rounding decides its sign.
+  const Vec3 lo(648.3042692949556, -678.9031069998529, 1430.39051634928);
+  const TriangleMesh box = box_mesh(lo, lo + Vec3(0.04, 0.03, 0.02), 24);
+  Diagnostics notes;
+  const TriangleMesh kept = prepare_closed_mesh(box, "design 'far'", &notes);
+  EXPECT_TRUE(notes.empty()) << notes.front();
+  EXPECT_EQ(kept.triangles, box.triangles);
+  EXPECT_NEAR(validate(kept).signed_volume, 0.04 * 0.03 * 0.02, 1e-12);
+}
+
 TEST(MeshHalfedge, ConvertsWithSameIndices) {
   const TriangleMesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), 3);
   const TriMesh mesh = to_trimesh(box);
