@@ -180,24 +180,34 @@ CurvePull pull_curve(const BoundaryCurve& curve, const SideDistance& distance, d
   const double target = (1 + options.overshoot) * eta;
   CurvePull out;
   const int n_samples = curve.sample_count();
+  // F and ∇F per sample, kept while none of the sample's control points moves: once most
+  // of the curve is inside, an iteration queries the distance only where it still moves.
+  std::vector<double> value(static_cast<size_t>(n_samples));
+  std::vector<Vec3> gradient(static_cast<size_t>(n_samples));
+  std::vector<char> stale(static_cast<size_t>(n_samples), 1), moved(controls->size(), 0);
   for (int iteration = 0;; ++iteration) {
     // Best displacement per control point: the largest requested (max over the samples).
     std::vector<Vec3> move(controls->size(), Vec3::Zero());
     double worst = -std::numeric_limits<double>::infinity();
     out.stuck_samples.clear();
     for (int s = 0; s < n_samples; ++s) {
-      Vec3 p = Vec3::Zero();
       double norm2 = 0;
       for (int k = curve.offsets[s]; k < curve.offsets[s + 1]; ++k) {
-        p += curve.weights[k] * (*controls)[curve.controls[k]];
         norm2 += curve.weights[k] * curve.weights[k];
+        if (moved[curve.controls[k]]) stale[s] = 1;
       }
-      Vec3 gradient;
-      const double f = distance.value(p, &gradient);
+      if (stale[s]) {
+        Vec3 p = Vec3::Zero();
+        for (int k = curve.offsets[s]; k < curve.offsets[s + 1]; ++k)
+          p += curve.weights[k] * (*controls)[curve.controls[k]];
+        value[s] = distance.value(p, &gradient[s]);
+        stale[s] = 0;
+      }
+      const double f = value[s];
       worst = std::max(worst, f);
       if (f <= eta) continue;
       out.stuck_samples.push_back(s);
-      const Vec3 delta = -(f - target) * gradient;
+      const Vec3 delta = -(f - target) * gradient[s];
       for (int k = curve.offsets[s]; k < curve.offsets[s + 1]; ++k) {
         const Vec3 d = curve.weights[k] / norm2 * delta;
         Vec3& m = move[curve.controls[k]];
@@ -212,7 +222,10 @@ CurvePull pull_curve(const BoundaryCurve& curve, const SideDistance& distance, d
       return out;
     }
     if (iteration == options.max_iterations) return out;
-    for (size_t i = 0; i < controls->size(); ++i) (*controls)[i] += move[i];
+    for (size_t i = 0; i < controls->size(); ++i) {
+      moved[i] = move[i] != Vec3::Zero();
+      (*controls)[i] += move[i];
+    }
   }
 }
 
