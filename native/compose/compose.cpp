@@ -61,9 +61,10 @@ struct Accumulator {
     ExactMesh out;
     if (snap > 0) {
       ExactMesh a = mesh, b = operand;
-      const int moved = detail::snap_onto(&b, a, snap) + detail::snap_onto(&a, b, snap);
-      if (moved > 0 && detail::unusable_operand(a, true).empty() &&
-          detail::unusable_operand(b, true).empty() && detail::exact_boolean(a, b, unite, &out)) {
+      std::vector<ExactMesh::Vertex_index> moved_a, moved_b;
+      const int moved = detail::snap_onto(&b, a, snap, &moved_b) + detail::snap_onto(&a, b, snap, &moved_a);
+      if (moved > 0 && detail::unusable_after_moving(a, moved_a).empty() &&
+          detail::unusable_after_moving(b, moved_b).empty() && detail::exact_boolean(a, b, unite, &out)) {
         snapped += moved;
         mesh = std::move(out);
         if (mesh.is_empty()) empty = true;

@@ -7,6 +7,7 @@
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
+#include <CGAL/box_intersection_d.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
@@ -96,7 +97,45 @@ std::string make_usable(ExactMesh* mesh, bool closed) {
   return unusable_operand(*mesh, closed);
 }
 
-int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta) {
+std::string unusable_after_moving(const ExactMesh& mesh, const std::vector<ExactMesh::Vertex_index>& moved) {
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, ExactMesh::Face_index,
+                                                      CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>;
+  auto box_of = [&](ExactMesh::Face_index f) {
+    CGAL::Bbox_3 b;
+    for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) b += mesh.point(v).bbox();
+    return Box(b, f);
+  };
+  std::vector<char> around(mesh.number_of_faces() + mesh.number_of_removed_faces(), 0);
+  std::vector<Box> near, all;
+  int degenerate = 0;
+  for (const auto v : moved) {
+    for (const auto f : CGAL::faces_around_target(mesh.halfedge(v), mesh)) {
+      if (f == ExactMesh::null_face() || around[f.idx()]) continue;
+      around[f.idx()] = 1;
+      near.push_back(box_of(f));
+      degenerate += PMP::is_degenerate_triangle_face(f, mesh);
+    }
+  }
+  if (degenerate > 0) return "has " + std::to_string(degenerate) + " degenerate triangles";
+  if (near.empty()) return {};
+  all.reserve(mesh.number_of_faces());
+  for (const auto f : mesh.faces()) all.push_back(box_of(f));
+  // Every pair that can cross now has a face around a moved vertex and boxes that meet:
+  // both are in the range, and the range's other pairs did not cross before the move.
+  std::vector<char> in_range = around;
+  CGAL::box_intersection_d(near.begin(), near.end(), all.begin(), all.end(),
+                           [&](const Box&, const Box& b) { in_range[b.info().idx()] = 1; });
+  std::vector<ExactMesh::Face_index> range;
+  for (const auto f : mesh.faces())
+    if (in_range[f.idx()]) range.push_back(f);
+  std::vector<std::pair<ExactMesh::Face_index, ExactMesh::Face_index>> pairs;
+  PMP::self_intersections(range, mesh, std::back_inserter(pairs));
+  if (!pairs.empty()) return "intersects itself (" + std::to_string(pairs.size()) + " triangle pairs)";
+  return {};
+}
+
+int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta,
+              std::vector<ExactMesh::Vertex_index>* moved_vertices) {
   using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
   using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Inexact, CGAL::AABB_face_graph_triangle_primitive<InexactMesh>>>;
   // `other` rounded (its faces in order), to find each vertex's nearest face; the moves
@@ -133,6 +172,7 @@ int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta) {
     if (!onto || *onto == p) continue;
     mesh->point(v) = *onto;
     ++moved;
+    if (moved_vertices) moved_vertices->push_back(v);
   }
   return moved;
 }

@@ -956,7 +956,14 @@ TEST(Compose, SnappingNearlyCoincidentOperandsLetsTheDesignBooleanRoundWithoutCr
       for (const GeneratedSolid& solid : c.solids) {
         if (solid.role != role) continue;
         ExactMesh operand = detail::to_exact(solid.mesh), out;
-        if (snap > 0) *moved += detail::snap_onto(&operand, g, snap) + detail::snap_onto(&g, operand, snap);
+        if (snap > 0) {
+          std::vector<ExactMesh::Vertex_index> on_g, on_operand;
+          *moved += detail::snap_onto(&operand, g, snap, &on_operand) + detail::snap_onto(&g, operand, snap, &on_g);
+          // The check of what moved answers as the check of the whole.
+          EXPECT_EQ(detail::unusable_after_moving(g, on_g).empty(), detail::unusable_operand(g, true).empty());
+          EXPECT_EQ(detail::unusable_after_moving(operand, on_operand).empty(),
+                    detail::unusable_operand(operand, true).empty());
+        }
         EXPECT_TRUE(detail::exact_boolean(g, operand, role == Role::KeepIn, &out)) << solid.name;
         g = std::move(out);
       }
@@ -981,6 +988,24 @@ TEST(Compose, SnappingNearlyCoincidentOperandsLetsTheDesignBooleanRoundWithoutCr
   EXPECT_EQ(after.boundary_edges, 0);
   EXPECT_EQ(after.non_manifold_edges, 0);
   EXPECT_NEAR(after.signed_volume, before.signed_volume, 1e-6 * std::abs(before.signed_volume));
+}
+
+// After a snap only the faces round the moved vertices can have come to cross: a vertex
+// pushed through the opposite side of a box is found, a small move is not, and the answer
+// is the whole mesh's check's.
+TEST(Compose, TheCheckAfterMovingVerticesFindsTheCrossingsTheyMade) {
+  const detail::ExactMesh box = detail::to_exact(box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1), 2));
+  detail::ExactMesh::Vertex_index top;  // the centre of the top face
+  for (const auto v : box.vertices())
+    if (box.point(v) == detail::ExactPoint(0.5, 0.5, 1)) top = v;
+  ASSERT_NE(top, detail::ExactMesh::null_vertex());
+  for (const double z : {0.9, -0.5}) {
+    detail::ExactMesh moved = box;
+    moved.point(top) = detail::ExactPoint(0.5, 0.5, z);
+    const std::string local = detail::unusable_after_moving(moved, {top});
+    EXPECT_EQ(local.empty(), z > 0) << local;
+    EXPECT_EQ(local.empty(), detail::unusable_operand(moved, true).empty());
+  }
 }
 
 // CGAL's corefinement requires operands without self-intersections; a keep-out that
