@@ -42,10 +42,29 @@ bool shorter(const ExactMesh& mesh, ExactMesh::Edge_index e, const Exact::FT& sq
              squared_limit) == CGAL::SMALLER;
 }
 
+// Whether Euler::collapse_edge may take e: both faces triangles, the link condition (no
+// pinch), and the out-degree ≥ 3 that its join_face requires at both ends and both apexes
+// (checked first, as every CGAL precondition here: broken, join_face walks a face cycle
+// that never returns to its start).
+bool collapsible(const ExactMesh& mesh, ExactMesh::Edge_index e) {
+  const auto h = mesh.halfedge(e), o = mesh.opposite(h);
+  if (mesh.is_border(h) || mesh.is_border(o)) return false;
+  if (!CGAL::is_triangle(h, mesh) || !CGAL::is_triangle(o, mesh)) return false;
+  for (const auto v : {mesh.source(h), mesh.target(h), mesh.target(mesh.next(h)), mesh.target(mesh.next(o))})
+    if (mesh.degree(v) < 3) return false;
+  return CGAL::Euler::does_satisfy_link_condition(e, mesh);
+}
+
 }  // namespace
 
 Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
   Rounded out;
+  // Collapses need a valid triangle mesh; anything else is only rounded (the caller's
+  // checks then see what that gives).
+  if (!CGAL::is_triangle_mesh(mesh) || !mesh.is_valid(false)) {
+    out.mesh = to_double(mesh);
+    return out;
+  }
   const Exact::FT squared_limit = Exact::FT(tolerance) * Exact::FT(tolerance);
   // A collapse can make a neighbouring edge short or long again: repeat until a pass finds
   // nothing it may collapse.
@@ -58,7 +77,7 @@ Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
     out.blocked = 0;
     for (const auto e : candidates) {
       if (mesh.is_removed(e) || !shorter(mesh, e, squared_limit)) continue;
-      if (!CGAL::Euler::does_satisfy_link_condition(e, mesh)) {
+      if (!collapsible(mesh, e)) {
         ++out.blocked;  // collapsing would pinch the surface; the caller's check decides
         continue;
       }
