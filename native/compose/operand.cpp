@@ -15,6 +15,8 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/shape_predicates.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 
@@ -180,13 +182,47 @@ int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta,
   return moved;
 }
 
+namespace {
+
+// `mesh` with its vertices in lexicographic order of their exact points and its faces in
+// order of their corners (each from its smallest), so that the same solid is the same
+// mesh. The corefinement's element order depends on where its two meshes' boxes happen
+// to lie in memory (CGAL's box intersection breaks ties by address), which depends on
+// everything the process allocated before; rounding and repair then depend on that order,
+// and the same design composed differently from one run to the next.
+ExactMesh in_canonical_order(const ExactMesh& mesh) {
+  std::vector<ExactMesh::Vertex_index> order(mesh.vertices().begin(), mesh.vertices().end());
+  std::sort(order.begin(), order.end(), [&](ExactMesh::Vertex_index a, ExactMesh::Vertex_index b) {
+    return CGAL::compare_xyz(mesh.point(a), mesh.point(b)) == CGAL::SMALLER;
+  });
+  ExactMesh out;
+  std::vector<ExactMesh::Vertex_index> renamed(mesh.number_of_vertices() + mesh.number_of_removed_vertices());
+  for (const auto v : order) renamed[v.idx()] = out.add_vertex(mesh.point(v));
+  std::vector<std::array<ExactMesh::Vertex_index, 3>> faces;
+  faces.reserve(mesh.number_of_faces());
+  for (const auto f : mesh.faces()) {
+    std::array<ExactMesh::Vertex_index, 3> c;
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) c[static_cast<size_t>(k++)] = renamed[v.idx()];
+    std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    faces.push_back(c);
+  }
+  std::sort(faces.begin(), faces.end());
+  for (const auto& c : faces) out.add_face(c[0], c[1], c[2]);
+  return out;
+}
+
+}  // namespace
+
 bool exact_boolean(const ExactMesh& a, const ExactMesh& b, bool unite, ExactMesh* out) {
   ExactMesh x = a, y = b, result;
   const bool ok = unite ? PMP::corefine_and_compute_union(x, y, result)
                         : PMP::corefine_and_compute_difference(x, y, result);
   // CGAL 5.5 can report success with an invalid halfedge structure: check what it returns.
-  if (!ok || !result.is_valid(false) || !CGAL::is_closed(result)) return false;
-  *out = std::move(result);
+  if (!ok || !result.is_valid(false) || !CGAL::is_closed(result) || !CGAL::is_triangle_mesh(result)) return false;
+  ExactMesh ordered = in_canonical_order(result);
+  if (ordered.number_of_faces() != result.number_of_faces() || !ordered.is_valid(false)) return false;
+  *out = std::move(ordered);
   return true;
 }
 
