@@ -78,7 +78,7 @@ Rounded round_to_doubles(ExactMesh mesh, double tolerance) {
     for (const auto e : candidates) {
       if (mesh.is_removed(e) || !shorter(mesh, e, squared_limit)) continue;
       if (!collapsible(mesh, e)) {
-        ++out.blocked;  // collapsing would pinch the surface; the caller's check decides
+        ++out.blocked;  // it would pinch the surface or break a precondition; the caller's check decides
         continue;
       }
       const auto h = mesh.halfedge(e);
