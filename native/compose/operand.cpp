@@ -173,7 +173,7 @@ int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta,
     }
     if (!onto || *onto == p) continue;
     // Evaluated now: the lazy kernel then keeps the exact point, not the projection that
-    // made it, for the corefinements that follow (each snapped step took 25-90 s without).
+    // made it, for the corefinements that follow (docs/compose_method.md).
     CGAL::exact(*onto);
     mesh->point(v) = *onto;
     ++moved;

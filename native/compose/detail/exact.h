@@ -70,8 +70,7 @@ int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta,
 
 // unusable_operand for a mesh that was usable until the `moved` vertices moved: only the
 // faces around them are tested, against every face whose box meets theirs, so the cost
-// follows the moved vertices, not the mesh (a bracket's design Boolean of 60k faces was
-// checked whole after each snap: 40% of its conversion).
+// follows the moved vertices, not the mesh (docs/compose_method.md).
 std::string unusable_after_moving(const ExactMesh& mesh, const std::vector<ExactMesh::Vertex_index>& moved);
 
 // a ∪ b (unite) or a \ b, exactly, both closed and usable (make_usable). The result is
