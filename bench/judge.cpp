@@ -300,8 +300,9 @@ std::vector<Point> inner_points(const Input& input, int count, double push, Rand
 }
 
 // Points inside each keep-in must be inside the composed mesh, but where a keep-out
-// overlaps the keep-in: keep-outs are removed last (§8.1), so those points are empty by
-// rule (a generated bore 1e-3 h wider than its boss's hole cuts the boss's wall).
+// overlaps the keep-in, or lies within eps of the point: keep-outs are removed last
+// (§8.1), so those points are empty by rule (a generated bore 1e-3 h wider than its boss's
+// hole cuts the boss's wall), and within eps of a keep-out either answer is in tolerance.
 json keep_ins_json(const Case& c, const Solid& composed, double eps, Random& random,
                    bool& all_inside) {
   json out = json::array();
@@ -318,7 +319,7 @@ json keep_ins_json(const Case& c, const Solid& composed, double eps, Random& ran
     for (const auto& p : points) {
       if (composed.side(p) != CGAL::ON_UNBOUNDED_SIDE) continue;
       const bool in_keep_out = std::any_of(c.keep_outs.begin(), c.keep_outs.end(), [&](const auto& l) {
-        return l->solid && l->solid->side(p) != CGAL::ON_UNBOUNDED_SIDE;
+        return l->solid && (l->solid->side(p) != CGAL::ON_UNBOUNDED_SIDE || l->solid->distance(p) <= eps);
       });
       if (in_keep_out) continue;
       const double depth = composed.distance(p);

@@ -42,12 +42,6 @@ struct Accumulator {
   ExactMesh mesh;
   bool empty = true;
   std::string why;
-  // Vertices within `snap` of the other operand's surface are moved onto it before each
-  // Boolean (detail::snap_onto: the operand onto G, then G onto the moved operand), if both
-  // stay usable; `snapped` counts them. 0: never.
-  double snap = 0;
-  int snapped = 0;
-
   bool apply(ExactMesh operand, bool unite, const std::string& what, bool checked = false) {
     const std::string unusable = checked ? std::string() : detail::make_usable(&operand, true);
     if (!unusable.empty()) {
@@ -59,18 +53,6 @@ struct Accumulator {
       return true;
     }
     ExactMesh out;
-    if (snap > 0) {
-      ExactMesh a = mesh, b = operand;
-      std::vector<ExactMesh::Vertex_index> moved_a, moved_b;
-      const int moved = detail::snap_onto(&b, a, snap, &moved_b) + detail::snap_onto(&a, b, snap, &moved_a);
-      if (moved > 0 && detail::unusable_after_moving(a, moved_a).empty() &&
-          detail::unusable_after_moving(b, moved_b).empty() && detail::exact_boolean(a, b, unite, &out)) {
-        snapped += moved;
-        mesh = std::move(out);
-        if (mesh.is_empty()) empty = true;
-        return true;
-      }
-    }
     if (!detail::exact_boolean(mesh, operand, unite, &out)) {
       why = std::string(unite ? "uniting " : "subtracting ") + what + " gives a non-manifold result";
       return false;
@@ -81,21 +63,40 @@ struct Accumulator {
   }
 };
 
-// Operand vertices this near another operand's surface (× the scene's size) are moved
-// onto it before each Boolean of the floor when the floor without it fails
-// (Accumulator::snap): surfaces that nearly coincide then coincide exactly, and
-// corefinement resolves them as coplanar faces instead of cutting slivers thinner than a
+// Each solid enters the Booleans grown by its own amount, between 1 and 2 times this
+// (× the scene's size): surfaces that coincide or nearly coincide (a keep-out bore in its
+// keep-in boss, the design's flat base on a keep-in's face, two flush keep-ins) then lie
+// that far apart or cross by that much, instead of being cut into slivers thinner than a
 // double can hold, which no rounding keeps from folding (docs/compose_method.md).
-constexpr double kSnap = 1e-9;
+constexpr double kGrow = 1e-6;
 
-void note_snapped(const Accumulator& g, ComposeReport* report) {
-  if (g.snapped == 0) return;
-  char text[240];
-  std::snprintf(text, sizeof text,
-                "%d vertices within %g x the scene's size of another operand moved onto it before "
-                "the Booleans (nearly coincident surfaces made coincident)",
-                g.snapped, kSnap);
-  report->notes.push_back(text);
+// The solids as the Booleans take them: solid s of n grown by kGrow × scale × (1 + s/n)
+// (detail::grown), or as given where growing it would make it unusable. `moved`: the
+// farthest any vertex moved.
+SolidSet grown_solids(const SolidSet& solids, double scale, double* moved) {
+  *moved = 0;
+  std::vector<SolidInput> grown;
+  const int n = solids.size();
+  for (int s = 0; s < n; ++s) {
+    SolidInput solid = solids.input(s);
+    TriangleMesh moved_mesh = detail::grown(solid.mesh, kGrow * scale * (1.0 + static_cast<double>(s) / n));
+    detail::ExactMesh check = detail::to_exact(moved_mesh);
+    if (detail::make_usable(&check, true).empty()) {
+      *moved = std::max(*moved, (moved_mesh.vertices - solid.mesh.vertices).rowwise().norm().maxCoeff());
+      solid.mesh = std::move(moved_mesh);
+    }
+    grown.push_back(std::move(solid));
+  }
+  Diagnostics unused;  // overlaps were noted for the solids as given
+  return SolidSet(std::move(grown), &unused);
+}
+
+void note_grown(double moved, ComposeReport* report) {
+  if (moved == 0) return;
+  report->notes.push_back("solid faces lie up to " + format_number(moved, 2) +
+                          " outside the input solids: each solid was grown by its own 1-2 x " +
+                          format_number(kGrow, 2) + " of the scene's size before the Booleans, so that nearly "
+                          "coincident surfaces are cut cleanly");
 }
 
 // Per face: the first solid whose triangles hold all three corners (to 1e-9 relative,
@@ -349,8 +350,11 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     if (surface.cage) scale = std::max(scale, bounding_box_diagonal(surface.cage->vertices));
   }
   if (design) scale = std::max(scale, bounding_box_diagonal(design->vertices));
+  double growth = 0;
+  const SolidSet grown = grown_solids(solids, scale, &growth);
   // §7: contact per component, from its cage when it has one, else (or when the cage cannot
-  // be pulled) from its design region. An Error from a tier (other than a cancel) is that
+  // be pulled) from its design region; cut at the grown solids the Booleans take, so that
+  // the caps cut out of ∂S lie exactly on their faces. An Error from a tier (other than a cancel) is that
   // tier failing, with its message as the reason.
   auto start = std::chrono::steady_clock::now();
   std::vector<detail::OrganicCell> cells;
@@ -377,11 +381,11 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     if (!surface.cage && !has_sheet) continue;
     detail::OrganicCell cell;
     ComponentContact contact;
-    auto region = [&](detail::OrganicCell* c) { return detail::establish(surface.sheet, solids, options, c); };
+    auto region = [&](detail::OrganicCell* c) { return detail::establish(surface.sheet, solids, grown, options, c); };
     if (surface.cage) {
       contact = attempt(
           [&](detail::OrganicCell* c) {
-            return detail::establish_cage(*surface.cage, surface.chain_solids, solids, options, c);
+            return detail::establish_cage(*surface.cage, surface.chain_solids, solids, grown, options, c);
           },
           component, "cage", &cell);
       // Tier 2: the cage extended into its solids by one row of quads, where pulling the
@@ -398,7 +402,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
                                            ": its cage cannot be extended into the solids: " + e.problem);
                 return none;
               }
-              ComponentContact r = detail::establish_cage(e.cage, surface.chain_solids, solids, options, c, e.sides);
+              ComponentContact r = detail::establish_cage(e.cage, surface.chain_solids, solids, grown, options, c, e.sides);
               r.surface = "extended cage";
               return r;
             },
@@ -432,7 +436,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   start = std::chrono::steady_clock::now();
   if (failed.empty()) {
     Accumulator g;
-    if (classify(cells, solids, context, &report, &g)) {
+    if (classify(cells, grown, context, &report, &g)) {
       // Rule 4: a cell bounded by organic faces of both orientations (two organic cells
       // that overlap, or an organic surface running through a keep-in) is inside; say so.
       for (size_t a = 0; a < cells.size(); ++a) {
@@ -447,8 +451,11 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
         }
       }
       report.seconds_boolean = seconds_since(start);
-      finish(g.mesh, solids, cells, scale, &out);
-      if (report.ok) return out;
+      finish(g.mesh, grown, cells, scale, &out);
+      if (report.ok) {
+        note_grown(growth, &report);
+        return out;
+      }
       failed = report.self_intersecting ? "the composed mesh intersects itself after rounding to doubles"
                                         : "the composed mesh is not a closed 2-manifold bounding a volume";
     } else {
@@ -457,9 +464,9 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   }
   report.diagnostics.push_back("the organic components cannot all be composed: " + failed);
   if (!design) return out;
-  // The floor: the whole design as an exact Boolean with the solids. Where it rounds to a
-  // mesh that crosses itself or cannot be composed, it is composed again with nearly
-  // coincident vertices snapped (Accumulator::snap): slower, so only then.
+  // The floor: the whole design as an exact Boolean with the solids, grown as for the tiers
+  // above; where that cannot be composed (a grown solid running into a feature of the
+  // design finer than the growth), again with the solids as given.
   // Faces off the solids are attributed to the nearest component's design region.
   cells.clear();
   for (const auto& surface : surfaces) {
@@ -470,36 +477,34 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   }
   const size_t diagnostics_before = report.diagnostics.size(), notes_before = report.notes.size();
   bool composed = false;
-  std::string why[2];  // why each attempt could not compose, unsnapped and snapped
+  std::string why[2];  // why each attempt could not compose: grown, as given
   for (int attempt = 0; attempt < 2; ++attempt) {
+    const SolidSet& operands = attempt == 0 ? grown : solids;
     Accumulator g;
-    g.snap = attempt == 0 ? 0 : kSnap * scale;
-    if (!design_boolean(*design, solids, context, &g)) {
+    if (!design_boolean(*design, operands, context, &g)) {
       why[attempt] = g.why;
       continue;
     }
     if (composed) {
-      // The first result crossed itself: its words give way to this one's.
+      // The first result could not be composed: its words give way to this one's.
       report.diagnostics.resize(diagnostics_before);
       report.notes.resize(notes_before);
-      report.notes.push_back("the design Boolean rounded to a mesh that crosses itself; composed again "
-                             "with nearly coincident vertices snapped");
+      report.notes.push_back("the design Boolean with the solids grown could not be composed; composed "
+                             "again with the solids as given");
     }
-    finish(g.mesh, solids, cells, scale, &out);
-    note_snapped(g, &report);
+    finish(g.mesh, operands, cells, scale, &out);
     composed = true;
+    if (report.ok && attempt == 0) note_grown(growth, &report);
     if (report.ok) break;
   }
   report.seconds_boolean = seconds_since(start);
   if (composed && !report.ok && !why[1].empty())
-    report.diagnostics.push_back("with nearly coincident vertices snapped, the design Boolean cannot be "
-                                 "composed: " + why[1]);
+    report.diagnostics.push_back("with the solids as given, the design Boolean cannot be composed: " + why[1]);
   if (!composed) {
     report.ok = false;
     report.diagnostics.push_back("the design Boolean (the design with the keep-ins added and the keep-outs "
                                  "removed) cannot be composed either: " + why[0] +
-                                 (why[1] != why[0] ? "; with nearly coincident vertices snapped: " + why[1]
-                                                   : std::string()));
+                                 (why[1] != why[0] ? "; with the solids as given: " + why[1] : std::string()));
     return out;
   }
   report.floor = true;

@@ -93,15 +93,17 @@ ComponentContact closed_shell(const OrganicSheet& sheet, detail::OrganicCell* ce
 
 }  // namespace
 
-ComponentContact detail::establish(const OrganicSheet& sheet, const SolidSet& solids,
+ComponentContact detail::establish(const OrganicSheet& sheet, const SolidSet& solids, const SolidSet& cut_solids,
                                    const ComposeOptions& options, OrganicCell* cell) {
   return establish_with(
-      sheet, [&](double eta) { return pull_sheet(sheet, solids, eta, options.pull); }, solids, options, cell);
+      sheet, [&](double eta) { return pull_sheet(sheet, solids, eta, options.pull); }, solids, cut_solids, options,
+      cell);
 }
 
 ComponentContact detail::establish_cage(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
-                                        const SolidSet& solids, const ComposeOptions& options,
-                                        OrganicCell* cell, const std::vector<int>& sides) {
+                                        const SolidSet& solids, const SolidSet& cut_solids,
+                                        const ComposeOptions& options, OrganicCell* cell,
+                                        const std::vector<int>& sides) {
   QuadCage last;
   const OrganicSheet sheet = cage_sheet(cage, chain_solids, options.pull.cage_samples_per_edge);
   ComponentContact out = establish_with(
@@ -111,15 +113,15 @@ ComponentContact detail::establish_cage(const QuadCage& cage, const std::vector<
         last = std::move(pulled.cage);
         return std::move(pulled.sheet);
       },
-      solids, options, cell);
+      solids, cut_solids, options, cell);
   if (out.surface != "closed shell") out.surface = "cage";
   out.cage = last.vertices.rows() > 0 ? std::move(last) : cage;
   return out;
 }
 
 ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPuller& pull_at,
-                                        const SolidSet& solids, const ComposeOptions& options,
-                                        OrganicCell* cell) {
+                                        const SolidSet& solids, const SolidSet& cut_solids,
+                                        const ComposeOptions& options, OrganicCell* cell) {
   ComponentContact out;
   out.component = sheet.component;
   std::set<int> members;
@@ -131,7 +133,7 @@ ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPu
     return out;
   }
   std::vector<SolidInput> inputs;
-  for (int s = 0; s < solids.size(); ++s) inputs.push_back(solids.input(s));
+  for (int s = 0; s < cut_solids.size(); ++s) inputs.push_back(cut_solids.input(s));
   const ExactMesh solid = solid_union(inputs, std::vector<int>(members.begin(), members.end()));
   double eta = options.initial_eta;
   if (eta >= 0) {
@@ -194,13 +196,13 @@ ComponentContact detail::establish_with(const OrganicSheet& sheet, const SheetPu
 ComponentContact establish_contact(const OrganicSheet& sheet, const SolidSet& solids,
                                    const ComposeOptions& options) {
   detail::OrganicCell cell;
-  return detail::establish(sheet, solids, options, &cell);
+  return detail::establish(sheet, solids, solids, options, &cell);
 }
 
 ComponentContact establish_cage_contact(const QuadCage& cage, const std::vector<std::vector<int>>& chain_solids,
                                         const SolidSet& solids, const ComposeOptions& options) {
   detail::OrganicCell cell;
-  return detail::establish_cage(cage, chain_solids, solids, options, &cell);
+  return detail::establish_cage(cage, chain_solids, solids, solids, options, &cell);
 }
 
 }  // namespace genbrep

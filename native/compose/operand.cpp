@@ -4,10 +4,7 @@
 // require closed meshes that bound a volume. Violating them is undefined behaviour: a
 // SIGSEGV inside the corefinement's intersection filter was seen on an unsmoothed voxel
 // bracket. Every operand is checked here first; a failed check takes the next tier.
-#include <CGAL/AABB_face_graph_triangle_primitive.h>
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/box_intersection_d.h>
+// Also here: the solids grown before the Booleans, and the Booleans' canonical order.
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/measure.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
@@ -99,87 +96,33 @@ std::string make_usable(ExactMesh* mesh, bool closed) {
   return unusable_operand(*mesh, closed);
 }
 
-std::string unusable_after_moving(const ExactMesh& mesh, const std::vector<ExactMesh::Vertex_index>& moved) {
-  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, ExactMesh::Face_index,
-                                                      CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>;
-  auto box_of = [&](ExactMesh::Face_index f) {
-    CGAL::Bbox_3 b;
-    for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) b += mesh.point(v).bbox();
-    return Box(b, f);
-  };
-  std::vector<char> around(mesh.number_of_faces() + mesh.number_of_removed_faces(), 0);
-  std::vector<Box> near, all;
-  int degenerate = 0;
-  for (const auto v : moved) {
-    for (const auto f : CGAL::faces_around_target(mesh.halfedge(v), mesh)) {
-      if (f == ExactMesh::null_face() || around[f.idx()]) continue;
-      around[f.idx()] = 1;
-      near.push_back(box_of(f));
-      degenerate += PMP::is_degenerate_triangle_face(f, mesh);
+TriangleMesh grown(const TriangleMesh& solid, double delta) {
+  const Eigen::Index nv = solid.vertices.rows();
+  std::vector<Vec3> weighted(static_cast<size_t>(nv), Vec3::Zero());
+  std::vector<std::vector<Vec3>> normals(static_cast<size_t>(nv));
+  for (Eigen::Index t = 0; t < solid.triangles.rows(); ++t) {
+    Vec3 p[3];
+    for (int k = 0; k < 3; ++k) p[k] = solid.vertices.row(solid.triangles(t, k)).transpose();
+    const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
+    if (n.norm() == 0) continue;  // a zero-area face has no side to move
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 a = p[(k + 1) % 3] - p[k], b = p[(k + 2) % 3] - p[k];
+      const double angle = std::atan2(a.cross(b).norm(), a.dot(b));
+      const auto v = static_cast<size_t>(solid.triangles(t, k));
+      weighted[v] += angle * n.normalized();
+      normals[v].push_back(n.normalized());
     }
   }
-  if (degenerate > 0) return "has " + std::to_string(degenerate) + " degenerate triangles";
-  if (near.empty()) return {};
-  all.reserve(mesh.number_of_faces());
-  for (const auto f : mesh.faces()) all.push_back(box_of(f));
-  // Every pair that can cross now has a face around a moved vertex and boxes that meet:
-  // both are in the range, and the range's other pairs did not cross before the move.
-  std::vector<char> in_range = around;
-  CGAL::box_intersection_d(near.begin(), near.end(), all.begin(), all.end(),
-                           [&](const Box&, const Box& b) { in_range[b.info().idx()] = 1; });
-  std::vector<ExactMesh::Face_index> range;
-  for (const auto f : mesh.faces())
-    if (in_range[f.idx()]) range.push_back(f);
-  std::vector<std::pair<ExactMesh::Face_index, ExactMesh::Face_index>> pairs;
-  PMP::self_intersections(range, mesh, std::back_inserter(pairs));
-  if (!pairs.empty()) return "intersects itself (" + std::to_string(pairs.size()) + " triangle pairs)";
-  return {};
-}
-
-int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta,
-              std::vector<ExactMesh::Vertex_index>* moved_vertices) {
-  using Inexact = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Inexact, CGAL::AABB_face_graph_triangle_primitive<InexactMesh>>>;
-  // `other` rounded (its faces in order), to find each vertex's nearest face; the moves
-  // are exact.
-  const InexactMesh near = to_inexact(to_double(other));
-  const std::vector<ExactMesh::Face_index> face_of(other.faces().begin(), other.faces().end());
-  if (face_of.empty()) return 0;
-  Tree tree(faces(near).first, faces(near).second, near);
-  tree.accelerate_distance_queries();
-  const Exact::FT limit = Exact::FT(delta) * Exact::FT(delta);
-  auto within = [&](const Exact::FT& squared) { return CGAL::compare(squared, limit) != CGAL::LARGER; };
-  int moved = 0;
-  for (const auto v : mesh->vertices()) {
-    const ExactPoint p = mesh->point(v);
-    const Inexact::Point_3 q(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
-    const auto [foot, face] = tree.closest_point_and_primitive(q);
-    if (CGAL::squared_distance(q, foot) > 4 * delta * delta) continue;
-    ExactPoint corner[3];
-    int k = 0;
-    for (const auto w : CGAL::vertices_around_face(other.halfedge(face_of[face.idx()]), other))
-      corner[k++] = other.point(w);
-    // Onto a corner within delta, else onto an edge's line, else onto the face's plane.
-    std::optional<ExactPoint> onto;
-    for (int i = 0; i < 3 && !onto; ++i)
-      if (within(CGAL::squared_distance(p, corner[i]))) onto = corner[i];
-    for (int i = 0; i < 3 && !onto; ++i) {
-      const Exact::Line_3 line(corner[i], corner[(i + 1) % 3]);
-      if (within(CGAL::squared_distance(p, line))) onto = line.projection(p);
-    }
-    if (!onto) {
-      const Exact::Plane_3 plane(corner[0], corner[1], corner[2]);
-      if (within(CGAL::squared_distance(p, plane))) onto = plane.projection(p);
-    }
-    if (!onto || *onto == p) continue;
-    // Evaluated now: the lazy kernel then keeps the exact point, not the projection that
-    // made it, for the corefinements that follow (docs/compose_method.md).
-    CGAL::exact(*onto);
-    mesh->point(v) = *onto;
-    ++moved;
-    if (moved_vertices) moved_vertices->push_back(v);
+  TriangleMesh out = solid;
+  for (Eigen::Index v = 0; v < nv; ++v) {
+    const Vec3& w = weighted[static_cast<size_t>(v)];
+    if (w.norm() == 0) continue;
+    const Vec3 m = w.normalized();
+    double least = 1;
+    for (const Vec3& n : normals[static_cast<size_t>(v)]) least = std::min(least, m.dot(n));
+    out.vertices.row(v) += (delta / std::max(least, 0.2) * m).transpose();
   }
-  return moved;
+  return out;
 }
 
 namespace {

@@ -61,17 +61,11 @@ std::string unusable_operand(const ExactMesh& mesh, bool closed);
 // surface keeps its shape), which the mesh stage accepts and CGAL does not.
 std::string make_usable(ExactMesh* mesh, bool closed);
 
-// Vertices of `mesh` within `delta` of `other`'s surface moved exactly onto it: onto the
-// nearest face's corner within delta, else onto the line of its edge within delta, else
-// onto its plane. Returns how many moved; none moves by more than delta (operand.cpp).
-// `moved`, if given, receives them.
-int snap_onto(ExactMesh* mesh, const ExactMesh& other, double delta,
-              std::vector<ExactMesh::Vertex_index>* moved = nullptr);
-
-// unusable_operand for a mesh that was usable until the `moved` vertices moved: only the
-// faces around them are tested, against every face whose box meets theirs, so the cost
-// follows the moved vertices, not the mesh (docs/compose_method.md).
-std::string unusable_after_moving(const ExactMesh& mesh, const std::vector<ExactMesh::Vertex_index>& moved);
+// `solid` (closed, outward) grown by `delta`: each vertex moved outward along its
+// angle-weighted normal, far enough that every face around it moves by at least `delta`
+// (at most 5 delta along the normal, at needle-sharp corners). Only the positions change
+// (operand.cpp).
+TriangleMesh grown(const TriangleMesh& solid, double delta);
 
 // a ∪ b (unite) or a \ b, exactly, both closed and usable (make_usable). The result is
 // checked (a valid, closed halfedge mesh); false when it is not one.
