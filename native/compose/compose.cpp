@@ -15,6 +15,8 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <map>
+#include <memory>
 
 #include "core/numbers.h"
 #include "compose/detail/establish.h"
@@ -305,6 +307,73 @@ void finish(const ExactMesh& exact, const SolidSet& solids, const std::vector<de
   if (report.self_intersecting) report.diagnostics.push_back(intersecting_pairs(out->mesh, solids));
 }
 
+// The design's own material outside the keep-ins (grown, as the Booleans take them):
+// D \ K exactly, split into volumes (closed, outward). Each piece borders the keep-ins on
+// their grown faces exactly, as the organic cells' caps do. Empty with `why` set when a
+// Boolean fails.
+std::vector<ExactMesh> design_pieces(const TriangleMesh& design, const SolidSet& grown, std::string* why) {
+  Accumulator g;
+  bool ok = g.apply(detail::to_exact(design), true, "the design");
+  for (int s = 0; s < grown.size() && ok; ++s)
+    if (grown.input(s).role == Role::KeepIn) ok = g.apply(detail::to_exact(grown.input(s).mesh), false, grown.describe(s));
+  if (!ok || g.empty) {
+    *why = ok ? "the design lies inside the keep-ins" : g.why;
+    return {};
+  }
+  auto volume = g.mesh.add_property_map<ExactMesh::Face_index, std::size_t>("f:volume", 0).first;
+  const std::size_t n = PMP::volume_connected_components(g.mesh, volume);
+  std::vector<ExactMesh> pieces(n);
+  std::vector<std::map<ExactMesh::Vertex_index, ExactMesh::Vertex_index>> renamed(n);
+  for (const auto f : g.mesh.faces()) {
+    const std::size_t k = volume[f];
+    std::array<ExactMesh::Vertex_index, 3> c;
+    int i = 0;
+    for (const auto v : CGAL::vertices_around_face(g.mesh.halfedge(f), g.mesh)) {
+      auto it = renamed[k].find(v);
+      if (it == renamed[k].end()) it = renamed[k].emplace(v, pieces[k].add_vertex(g.mesh.point(v))).first;
+      c[static_cast<size_t>(i++)] = it->second;
+    }
+    pieces[k].add_face(c[0], c[1], c[2]);
+  }
+  return pieces;
+}
+
+// Which pieces each sheet's vertices lie on: per sheet, the pieces nearest to at least a
+// tenth of its vertices (a design region is within the tolerance of the design's surface,
+// and its material is the piece behind that surface).
+std::vector<std::vector<int>> pieces_of(const std::vector<ExactMesh>& pieces,
+                                        const std::vector<const OrganicSheet*>& sheets) {
+  std::vector<InexactMesh> meshes;
+  std::vector<std::unique_ptr<Tree>> trees;
+  for (const auto& piece : pieces) {
+    meshes.push_back(to_inexact(detail::to_double(piece)));
+  }
+  for (const auto& m : meshes) {
+    trees.push_back(std::make_unique<Tree>(faces(m).first, faces(m).second, m));
+    trees.back()->accelerate_distance_queries();
+  }
+  std::vector<std::vector<int>> out;
+  for (const OrganicSheet* sheet : sheets) {
+    std::vector<int> votes(pieces.size(), 0);
+    const Eigen::Index nv = sheet ? sheet->mesh.vertices.rows() : 0;
+    for (Eigen::Index v = 0; v < nv; ++v) {
+      const Inexact::Point_3 p(sheet->mesh.vertices(v, 0), sheet->mesh.vertices(v, 1), sheet->mesh.vertices(v, 2));
+      double best = std::numeric_limits<double>::infinity();
+      int nearest = -1;
+      for (size_t k = 0; k < trees.size(); ++k) {
+        const double d = CGAL::to_double(trees[k]->squared_distance(p));
+        if (d < best) best = d, nearest = static_cast<int>(k);
+      }
+      if (nearest >= 0) ++votes[static_cast<size_t>(nearest)];
+    }
+    std::vector<int> mine;
+    for (size_t k = 0; k < votes.size(); ++k)
+      if (votes[k] > 0 && 10 * votes[k] >= nv) mine.push_back(static_cast<int>(k));
+    out.push_back(mine);
+  }
+  return out;
+}
+
 // `contact` took a lower tier because of `why` (the higher tier's diagnostics): its
 // fallback reason is `reason` with the first of them and `tail`; its diagnostics start with
 // "organic component N: <reason>, composed from <what>" and `why`, indented.
@@ -315,6 +384,110 @@ void fell_back(ComponentContact* contact, const Diagnostics& why, const std::str
                     ", composed from " + what};
   for (const auto& w : why) lines.push_back("  cage: " + w);
   contact->diagnostics.insert(contact->diagnostics.begin(), lines.begin(), lines.end());
+}
+
+// Composes the components that have a cell from it, and every other component from its
+// part of the design solid (design_pieces): the pieces its design region lies on; a
+// component with a cell that shares a piece with one without gives its cell up for it.
+// False (out->contacts and report untouched but for diagnostics) where that cannot be done
+// or composed: a component without a cell borders a seed (its bite would be lost) or has
+// no design region, a bite would have to give its cell up, or the Booleans or the
+// rounding fail.
+bool by_component(const TriangleMesh& design, const std::vector<OrganicSurface>& surfaces, const SolidSet& solids,
+                  const SolidSet& grown, const std::vector<size_t>& contact_surface,
+                  const std::vector<int>& contact_cell, const std::vector<detail::OrganicCell>& cells,
+                  double growth, double scale, const Context& context, Composed* out) {
+  const size_t n = contact_surface.size();
+  std::vector<char> from_design(n, 0);
+  for (size_t c = 0; c < n; ++c) {
+    if (contact_cell[c] >= 0) continue;
+    const OrganicSheet& sheet = surfaces[contact_surface[c]].sheet;
+    if (sheet.mesh.triangles.rows() == 0) return false;
+    for (const auto& loop : sheet.loops)
+      for (int s : loop.solids)
+        if (solids.input(s).role == Role::Seed) return false;
+    from_design[c] = 1;
+  }
+  std::string why;
+  const std::vector<ExactMesh> pieces = design_pieces(design, grown, &why);
+  if (pieces.empty()) return false;
+  std::vector<const OrganicSheet*> sheets;
+  for (size_t c = 0; c < n; ++c) {
+    const OrganicSheet& sheet = surfaces[contact_surface[c]].sheet;
+    sheets.push_back(sheet.mesh.triangles.rows() > 0 ? &sheet : nullptr);
+  }
+  const std::vector<std::vector<int>> near = pieces_of(pieces, sheets);
+  std::vector<char> taken(pieces.size(), 0);
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (size_t c = 0; c < n; ++c) {
+      if (from_design[c]) {
+        if (near[c].empty()) return false;
+        for (int k : near[c]) changed = changed || !taken[static_cast<size_t>(k)], taken[static_cast<size_t>(k)] = 1;
+      } else if (std::any_of(near[c].begin(), near[c].end(), [&](int k) { return taken[static_cast<size_t>(k)]; })) {
+        if (!cells[static_cast<size_t>(contact_cell[c])].additive) return false;
+        from_design[c] = 1, changed = true;
+      }
+    }
+  }
+  // The operands: the kept cells and the pieces; for face sources, the kept cells and the
+  // design regions of the others.
+  std::vector<detail::OrganicCell> operands, sources;
+  std::string names;
+  for (size_t c = 0; c < n; ++c) {
+    if (!from_design[c]) {
+      operands.push_back(cells[static_cast<size_t>(contact_cell[c])]);
+      sources.push_back(cells[static_cast<size_t>(contact_cell[c])]);
+      continue;
+    }
+    detail::OrganicCell region;
+    region.component = out->contacts[c].component;
+    region.trimmed = detail::to_exact(surfaces[contact_surface[c]].sheet.mesh);
+    sources.push_back(std::move(region));
+    names += (names.empty() ? "" : ", ") + std::to_string(out->contacts[c].component);
+  }
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    if (!taken[k]) continue;
+    detail::OrganicCell piece;
+    piece.closed = pieces[k];
+    piece.additive = true;
+    piece.usable = true;  // a volume of an exact Boolean's result: closed, outward, not crossing
+    piece.volume = detail::signed_volume(piece.closed);
+    operands.push_back(std::move(piece));
+  }
+  auto& report = out->report;
+  const ComposeReport before = report;
+  Accumulator g;
+  if (!classify(operands, grown, context, &report, &g)) {
+    report = before;
+    report.diagnostics.push_back("composing the organic components without a working tier from their part of "
+                                 "the design solid: " + g.why);
+    return false;
+  }
+  finish(g.mesh, grown, sources, scale, out);
+  if (!report.ok) {
+    report = before;
+    report.diagnostics.push_back("composing the organic components without a working tier from their part of "
+                                 "the design solid: " +
+                                 std::string(report.self_intersecting ? "the composed mesh intersects itself"
+                                                                      : "the composed mesh is not closed"));
+    return false;
+  }
+  note_grown(growth, &report);
+  for (size_t c = 0; c < n; ++c) {
+    if (!from_design[c]) continue;
+    ComponentContact& contact = out->contacts[c];
+    if (contact_cell[c] >= 0) {
+      contact.fallback = "its part of the design solid is shared with an organic component no tier composed";
+    } else {
+      contact.fallback = contact.diagnostics.empty() ? "no tier composed it" : contact.diagnostics.back();
+    }
+    contact.surface = "design solid";
+  }
+  report.diagnostics.push_back("organic component" + std::string(names.find(',') == std::string::npos ? " " : "s ") +
+                               names + ": composed from their part of the design solid (the design less the "
+                               "keep-ins), the other components from their own cells");
+  return true;
 }
 
 }  // namespace
@@ -358,6 +531,8 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   // tier failing, with its message as the reason.
   auto start = std::chrono::steady_clock::now();
   std::vector<detail::OrganicCell> cells;
+  std::vector<size_t> contact_surface;  // per contact: its index in `surfaces`
+  std::vector<int> contact_cell;        // per contact: its index in `cells`, or -1 (no tier)
   std::string failed;  // the first component no tier could compose, and why
   auto attempt = [&](const std::function<ComponentContact(detail::OrganicCell*)>& tier, int component,
                      const char* what, detail::OrganicCell* cell) {
@@ -423,6 +598,8 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     } else {
       contact = attempt(region, component, "design region", &cell);
     }
+    contact_surface.push_back(i);
+    contact_cell.push_back(contact.established ? static_cast<int>(cells.size()) : -1);
     if (contact.established) {
       cells.push_back(std::move(cell));
     } else if (failed.empty()) {
@@ -461,6 +638,14 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
     } else {
       failed = g.why;
     }
+  }
+  // Components no tier composed take their part of the design solid and the others keep
+  // their cells (by_component); only where that fails does every component fall to the floor.
+  if (!failed.empty() && design &&
+      by_component(*design, surfaces, solids, grown, contact_surface, contact_cell, cells, growth, scale, context,
+                   &out)) {
+    report.seconds_boolean = seconds_since(start);
+    return out;
   }
   report.diagnostics.push_back("the organic components cannot all be composed: " + failed);
   if (!design) return out;

@@ -24,11 +24,16 @@
 // Tiers. Each component is composed from the best surface that works: its pulled fitted
 // cage ("cage"), else that cage extended into its solids by a row of quads and pulled
 // ("extended cage", pull/extend.cpp), else its design region ("design region"); a component with no boundary on
-// a solid (a closed organic shell) is its own closed cell. When a component has no tier
-// that works, or the Booleans or the rounding cannot give a valid solid, and the design
-// is given, the floor takes over: the exact Boolean (D ∪ K) \ L of the design with the
-// keep-ins added and the keep-outs removed ("design Boolean", every component). Each
-// component's contact says which tier it used and why it fell back.
+// a solid (a closed organic shell) is its own closed cell. Where the design is given, a
+// component with no tier that works takes its part of the design solid: the volumes of
+// the exact D \ K (design less keep-ins) its design region lies on ("design solid"; a
+// component with a cell that shares such a volume gives its cell up for it). When that
+// cannot be done (such a component borders a seed, or would need a bite's volume), or the
+// Booleans or the rounding cannot give a valid solid, the floor takes over: the exact
+// Boolean (D ∪ K) \ L of the design with the keep-ins added and the keep-outs removed
+// ("design Boolean", every component). The solids enter every Boolean slightly grown
+// (docs/compose_method.md). Each component's contact says which tier it used and why it
+// fell back.
 // Preconditions: nothing reaches corefinement that breaks CGAL's documented ones (triangle
 // meshes without self-intersections or degenerate faces; Boolean operands closed and
 // bounding a volume): operands are checked first and a failed check takes the next tier.
@@ -68,7 +73,8 @@ struct ComponentContact {
   double cell_volume = 0;      // signed volume of Q, design units³
   OrganicSheet pulled;         // the pulled sheet (a cage: its pulled limit tessellation)
   // What was composed: "cage", "extended cage", "design region", "closed shell" (a cage's
-  // or the design's closed component) or "design Boolean" (the floor).
+  // or the design's closed component), "design solid" (its part of D \ K) or "design
+  // Boolean" (the floor).
   std::string surface = "design region";
   std::string fallback;        // why a lower tier than the component's best was used; empty if none
   QuadCage cage;               // surface "cage" or "extended cage": the pulled cage (matches `pulled`)

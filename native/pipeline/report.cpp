@@ -12,7 +12,8 @@ using json = nlohmann::ordered_json;
 // The "composed" section: checks measured on the composed mesh, and per component which
 // surface was composed (its tier: "cage", the pulled fitted cage; "extended cage", the cage
 // extended into its solids by a row of quads and pulled; "design region"; "closed
-// shell"; "design Boolean", the floor) and, below its best tier, why ("fallback").
+// shell"; "design solid", its part of the design less the keep-ins; "design Boolean", the
+// floor) and, below its best tier, why ("fallback").
 json composed_json(const Result& result) {
   const ComposeReport& c = result.composed.report;
   json contacts = json::array();

@@ -329,8 +329,8 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, ComposeFixturePipelines,
 
 // §9.1: a keep-in and a keep-out 0.003 apart (h = 0.05), an organic dome across both.
 // Without the design the gap is reported by name; with it, a solid is always made: from
-// the dome's design region when the contact holds, else as the design Boolean, the
-// fallback naming the gap.
+// the dome's design region when the contact holds, else from its part of the design solid
+// (the design less the keep-ins), the fallback naming the gap.
 TEST(Compose, TinyGapGivesASolidAndNamesTheGap) {
   const Scene s = gap_dome_scene(0.05, 0.003);
   const TriangleMesh& design = s.design;
@@ -342,8 +342,9 @@ TEST(Compose, TinyGapGivesASolidAndNamesTheGap) {
   expect_valid(r);
   ASSERT_EQ(r.composed.contacts.size(), 1u);
   const auto& contact = r.composed.contacts[0];
-  if (r.composed.report.floor) {
-    EXPECT_EQ(contact.surface, "design Boolean");
+  EXPECT_FALSE(r.composed.report.floor);
+  if (contact.surface != "design region") {
+    EXPECT_EQ(contact.surface, "design solid");
     EXPECT_NE(contact.fallback.find("crosses a gap of 0.003 between keep-in 'boss' and keep-out 'bolt'"),
               std::string::npos)
         << contact.fallback;
@@ -359,6 +360,49 @@ TEST(Compose, TinyGapGivesASolidAndNamesTheGap) {
               std::string::npos)
         << joined(bare.composed.report.diagnostics);
   }
+}
+
+// One component without a working tier (§9.1's gap dome) beside one that composes (a tube
+// between two keep-ins, 6 units away): the dome takes its part of the design solid (the
+// design less the keep-ins), the tube keeps its own cell, and the solid is valid; the
+// whole design is not the floor.
+TEST(Compose, AComponentWithoutAWorkingTierTakesItsPartOfTheDesignAndTheOthersKeepTheirCells) {
+  const Scene dome = gap_dome_scene(0.05, 0.003);
+  Scene tube = tube_scene(0.05);
+  const Vec3 away(0, 6, 0);
+  tube.design.vertices.rowwise() += away.transpose();
+  for (auto& solid : tube.solids) solid.mesh.vertices.rowwise() += away.transpose();
+  std::vector<SolidInput> solids = dome.solids;
+  solids.insert(solids.end(), tube.solids.begin(), tube.solids.end());
+  const Converted r = convert("gap dome and tube", merge({dome.design, tube.design}), solids, 0.05, true);
+  std::printf("[compose] gap dome and tube: floor=%d%s\n", r.composed.report.floor,
+              joined(r.composed.report.diagnostics).c_str());
+  expect_valid(r, false);
+  EXPECT_FALSE(r.composed.report.floor);
+  ASSERT_EQ(r.composed.contacts.size(), 2u);
+  int from_design = 0, own = 0;
+  for (const auto& contact : r.composed.contacts) {
+    const double y = contact.pulled.mesh.vertices.rows() > 0 ? contact.pulled.mesh.vertices.col(1).mean() : 0;
+    if (contact.surface == "design solid") {
+      ++from_design;
+      EXPECT_NE(contact.fallback.find("crosses a gap of 0.003"), std::string::npos) << contact.fallback;
+    } else {
+      ++own;
+      EXPECT_EQ(contact.surface, "design region");
+      EXPECT_TRUE(contact.fallback.empty()) << contact.fallback;
+      EXPECT_GT(y, 3);  // the tube
+    }
+  }
+  EXPECT_EQ(from_design, 1);
+  EXPECT_EQ(own, 1);
+  ASSERT_EQ(fallbacks(r.composed).size(), 1u);
+  // Every face is the design's, a solid's or the tube's: its organic faces near the tube.
+  int tube_faces = 0;
+  for (Eigen::Index f = 0; f < r.composed.mesh.triangles.rows(); ++f)
+    tube_faces += r.composed.mesh.vertices(r.composed.mesh.triangles(f, 0), 1) > 3 &&
+                  r.composed.mesh.triangle_source[static_cast<size_t>(f)] < 0;
+  EXPECT_GT(tube_faces, 0);
+  EXPECT_EQ(validate(r.composed.mesh).shells, 2);
 }
 
 TEST(Pull, CubicBsplineCurveReproducesItsControlPolygonAverages) {

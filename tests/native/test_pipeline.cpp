@@ -305,8 +305,8 @@ TEST(Cli, ComposeRecomposesFromTheCagesConvertWrote) {
 
 // Exit status 3: a solid was written, but a component fell back below its best tier. An
 // organic dome across a keep-in and a keep-out 0.003 apart (§9.1's gap): its boundary
-// cannot be pulled across the gap, so the floor (the design Boolean) composes the solid,
-// and standard error says which component fell back and why, one line each.
+// cannot be pulled across the gap, so its part of the design solid composes it, and
+// standard error says which component fell back and why, one line each.
 TEST(Cli, FallbackWritesTheSolidAndExitsThree) {
   const Scene s = gap_dome_scene(0.05, 0.003);
   const fs::path dir = temp_dir("fallback");
