@@ -410,7 +410,10 @@ bool by_component(const TriangleMesh& design, const std::vector<OrganicSurface>&
   }
   std::string why;
   const std::vector<ExactMesh> pieces = design_pieces(design, grown, &why);
-  if (pieces.empty()) return false;
+  if (pieces.empty()) {
+    out->report.diagnostics.push_back("the design solid (the design less the keep-ins) cannot be composed: " + why);
+    return false;
+  }
   std::vector<const OrganicSheet*> sheets;
   for (size_t c = 0; c < n; ++c) {
     const OrganicSheet& sheet = surfaces[contact_surface[c]].sheet;
