@@ -5,6 +5,8 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/boost/graph/Face_filtered_graph.h>
+#include <CGAL/boost/graph/copy_face_graph.h>
 #include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -15,7 +17,6 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
-#include <map>
 #include <memory>
 
 #include "core/numbers.h"
@@ -314,8 +315,10 @@ void finish(const ExactMesh& exact, const SolidSet& solids, const std::vector<de
 std::vector<ExactMesh> design_pieces(const TriangleMesh& design, const SolidSet& grown, std::string* why) {
   Accumulator g;
   bool ok = g.apply(detail::to_exact(design), true, "the design");
-  for (int s = 0; s < grown.size() && ok; ++s)
-    if (grown.input(s).role == Role::KeepIn) ok = g.apply(detail::to_exact(grown.input(s).mesh), false, grown.describe(s));
+  for (int s = 0; s < grown.size() && ok; ++s) {
+    if (grown.input(s).role != Role::KeepIn) continue;
+    ok = g.apply(detail::to_exact(grown.input(s).mesh), false, grown.describe(s));
+  }
   if (!ok || g.empty) {
     *why = ok ? "the design lies inside the keep-ins" : g.why;
     return {};
@@ -323,18 +326,8 @@ std::vector<ExactMesh> design_pieces(const TriangleMesh& design, const SolidSet&
   auto volume = g.mesh.add_property_map<ExactMesh::Face_index, std::size_t>("f:volume", 0).first;
   const std::size_t n = PMP::volume_connected_components(g.mesh, volume);
   std::vector<ExactMesh> pieces(n);
-  std::vector<std::map<ExactMesh::Vertex_index, ExactMesh::Vertex_index>> renamed(n);
-  for (const auto f : g.mesh.faces()) {
-    const std::size_t k = volume[f];
-    std::array<ExactMesh::Vertex_index, 3> c;
-    int i = 0;
-    for (const auto v : CGAL::vertices_around_face(g.mesh.halfedge(f), g.mesh)) {
-      auto it = renamed[k].find(v);
-      if (it == renamed[k].end()) it = renamed[k].emplace(v, pieces[k].add_vertex(g.mesh.point(v))).first;
-      c[static_cast<size_t>(i++)] = it->second;
-    }
-    pieces[k].add_face(c[0], c[1], c[2]);
-  }
+  for (std::size_t k = 0; k < n; ++k)
+    CGAL::copy_face_graph(CGAL::Face_filtered_graph<ExactMesh>(g.mesh, k, volume), pieces[k]);
   return pieces;
 }
 
@@ -393,7 +386,7 @@ void fell_back(ComponentContact* contact, const Diagnostics& why, const std::str
 // or composed: a component without a cell borders a seed (its bite would be lost) or has
 // no design region, a bite would have to give its cell up, or the Booleans or the
 // rounding fail.
-bool by_component(const TriangleMesh& design, const std::vector<OrganicSurface>& surfaces, const SolidSet& solids,
+bool by_component(const TriangleMesh& design, const std::vector<OrganicSurface>& surfaces,
                   const SolidSet& grown, const std::vector<size_t>& contact_surface,
                   const std::vector<int>& contact_cell, const std::vector<detail::OrganicCell>& cells,
                   double growth, double scale, const Context& context, Composed* out) {
@@ -405,7 +398,7 @@ bool by_component(const TriangleMesh& design, const std::vector<OrganicSurface>&
     if (sheet.mesh.triangles.rows() == 0) return false;
     for (const auto& loop : sheet.loops)
       for (int s : loop.solids)
-        if (solids.input(s).role == Role::Seed) return false;
+        if (grown.input(s).role == Role::Seed) return false;
     from_design[c] = 1;
   }
   std::string why;
@@ -530,8 +523,8 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   const SolidSet grown = grown_solids(solids, scale, &growth);
   // §7: contact per component, from its cage when it has one, else (or when the cage cannot
   // be pulled) from its design region; cut at the grown solids the Booleans take, so that
-  // the caps cut out of ∂S lie exactly on their faces. An Error from a tier (other than a cancel) is that
-  // tier failing, with its message as the reason.
+  // the caps cut out of ∂S lie exactly on their faces. An Error from a tier (other than a
+  // cancel) is that tier failing, with its message as the reason.
   auto start = std::chrono::steady_clock::now();
   std::vector<detail::OrganicCell> cells;
   std::vector<size_t> contact_surface;  // per contact: its index in `surfaces`
@@ -580,7 +573,8 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
                                            ": its cage cannot be extended into the solids: " + e.problem);
                 return none;
               }
-              ComponentContact r = detail::establish_cage(e.cage, surface.chain_solids, solids, grown, options, c, e.sides);
+              ComponentContact r =
+                  detail::establish_cage(e.cage, surface.chain_solids, solids, grown, options, c, e.sides);
               r.surface = "extended cage";
               return r;
             },
@@ -645,8 +639,7 @@ Composed compose(const std::vector<OrganicSurface>& surfaces, const SolidSet& so
   // Components no tier composed take their part of the design solid and the others keep
   // their cells (by_component); only where that fails does every component fall to the floor.
   if (!failed.empty() && design &&
-      by_component(*design, surfaces, solids, grown, contact_surface, contact_cell, cells, growth, scale, context,
-                   &out)) {
+      by_component(*design, surfaces, grown, contact_surface, contact_cell, cells, growth, scale, context, &out)) {
     report.seconds_boolean = seconds_since(start);
     return out;
   }
